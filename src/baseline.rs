@@ -1,0 +1,110 @@
+//! The prediction layers mlmap replaces, in `f32` on the device (DESIGN §1.4): the
+//! YOLOv4-style Sigmoid layer and the Softmax layer. They exist so benchmarks and
+//! firmware can compare like with like; host evaluation uses `f64` versions.
+
+use crate::error::InferError;
+use crate::layer::{self, Scores};
+use crate::math::Backend;
+
+/// `OS * sigma(x_i)` per class, the Sigmoid layer of YOLOv4 (the paper's "SG").
+///
+/// Uses `exp` of a non-positive argument only, so it cannot overflow.
+///
+/// # Errors
+///
+/// As [`Table::ml`](crate::Table::ml).
+///
+/// # Panics
+///
+/// Never.
+#[inline]
+pub fn sigmoid<M: Backend, const K: usize>(
+    logits: &[f32; K],
+    objectness: f32,
+) -> Result<Scores<K>, InferError> {
+    layer::check(logits, objectness, K, K)?;
+    let mut out = [0.0; K];
+    for (o, &x) in out.iter_mut().zip(logits) {
+        let s = if x >= 0.0 {
+            1.0 / (1.0 + M::exp(-x))
+        } else {
+            let e = M::exp(x);
+            e / (1.0 + e)
+        };
+        *o = objectness * s;
+    }
+    Ok(Scores(out))
+}
+
+/// `OS * softmax(x)_i`, computed with the maximum subtracted first.
+///
+/// # Errors
+///
+/// As [`Table::ml`](crate::Table::ml).
+///
+/// # Panics
+///
+/// Never.
+#[inline]
+pub fn softmax<M: Backend, const K: usize>(
+    logits: &[f32; K],
+    objectness: f32,
+) -> Result<Scores<K>, InferError> {
+    layer::check(logits, objectness, K, K)?;
+    let max = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let mut out = [0.0; K];
+    if max.is_infinite() {
+        // All -inf, or some +inf: the limit puts equal mass on the largest entries.
+        let n = logits.iter().filter(|&&x| x == max).count() as f32;
+        for (o, &x) in out.iter_mut().zip(logits) {
+            *o = if x == max { objectness / n } else { 0.0 };
+        }
+        return Ok(Scores(out));
+    }
+    let mut sum = 0.0;
+    for (o, &x) in out.iter_mut().zip(logits) {
+        *o = M::exp(x - max);
+        sum += *o;
+    }
+    let scale = objectness / sum;
+    for o in out.iter_mut() {
+        *o *= scale;
+    }
+    Ok(Scores(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Libm;
+
+    #[test]
+    fn sigmoid_values() {
+        // sigma(0) = 0.5, sigma(2) = 0.8807970779778823, sigma(-2) = 0.11920292202211755.
+        let s = sigmoid::<Libm, 3>(&[0.0, 2.0, -2.0], 0.5).unwrap().0;
+        let want = [0.25, 0.440_398_538_988_941_1, 0.059_601_461_011_058_77];
+        for (g, w) in s.iter().zip(want) {
+            assert!((*g as f64 - w).abs() < 1e-7, "{g} vs {w}");
+        }
+    }
+
+    #[test]
+    fn softmax_values_and_limits() {
+        // softmax([1, 2, 3]) = [0.09003057, 0.24472847, 0.66524096].
+        let s = softmax::<Libm, 3>(&[1.0, 2.0, 3.0], 1.0).unwrap().0;
+        let want = [
+            0.090_030_573_170_380_46,
+            0.244_728_471_054_797_64,
+            0.665_240_955_774_821_9,
+        ];
+        for (g, w) in s.iter().zip(want) {
+            assert!((*g as f64 - w).abs() < 1e-7, "{g} vs {w}");
+        }
+        let s = softmax::<Libm, 3>(&[f32::INFINITY, 0.0, f32::INFINITY], 1.0)
+            .unwrap()
+            .0;
+        assert_eq!(s, [0.5, 0.0, 0.5]);
+        let s = softmax::<Libm, 2>(&[f32::NEG_INFINITY; 2], 0.8).unwrap().0;
+        assert_eq!(s, [0.4, 0.4]);
+    }
+}

@@ -1,0 +1,166 @@
+//! `defmt::Format` for every public type (feature `defmt`), kept in one place so the
+//! modules shared with `build.rs` stay free of target-only derives.
+
+use defmt::{write, Format, Formatter};
+
+use crate::{
+    BatchError, ClassName, DecodeError, EdgeMode, EncodeError, Gaussian, Head, Histogram,
+    InferError, Scores, Settings, Table, TableError, UpperTail,
+};
+
+impl Format for Head {
+    fn format(&self, f: Formatter<'_>) {
+        match self {
+            Self::Ml => write!(f, "ML"),
+            Self::Map => write!(f, "MAP"),
+        }
+    }
+}
+
+impl Format for TableError {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::Edges { head, class } => {
+                write!(f, "{} histogram of class {}: bad edges", head, class)
+            }
+            Self::Frequencies { head, class } => {
+                write!(f, "{} histogram of class {}: bad frequencies", head, class)
+            }
+            Self::BinCount { head, class } => {
+                write!(f, "{} histogram of class {}: wrong bin count", head, class)
+            }
+            Self::Mean { class } => write!(f, "prior of class {}: bad mean", class),
+            Self::Variance { class } => write!(f, "prior of class {}: bad variance", class),
+            Self::Lambda { head } => write!(f, "{} lambda out of range", head),
+            Self::Name { class } => write!(f, "name of class {} invalid", class),
+            Self::DuplicateName { class } => write!(f, "name of class {} repeated", class),
+            Self::ClassCount => write!(f, "class count out of range"),
+        }
+    }
+}
+
+impl Format for DecodeError {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::Truncated => write!(f, "Truncated"),
+            Self::NotATable => write!(f, "NotATable"),
+            Self::Corrupted => write!(f, "Corrupted"),
+            Self::UnsupportedVersion { found } => write!(f, "UnsupportedVersion({})", found),
+            Self::ShapeMismatch { expected, found } => {
+                write!(f, "ShapeMismatch(expected {}, found {})", expected, found)
+            }
+            Self::Malformed => write!(f, "Malformed"),
+            Self::Invalid(e) => write!(f, "Invalid({})", e),
+        }
+    }
+}
+
+impl Format for EncodeError {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "BufferTooSmall")
+    }
+}
+
+impl Format for InferError {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::NanLogit { class } => write!(f, "NanLogit({})", class),
+            Self::Objectness => write!(f, "Objectness"),
+            Self::Length => write!(f, "Length"),
+        }
+    }
+}
+
+impl Format for BatchError {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::LengthMismatch => write!(f, "LengthMismatch"),
+            Self::Row { index, error } => write!(f, "Row({}, {})", index, error),
+        }
+    }
+}
+
+impl Format for EdgeMode {
+    fn format(&self, f: Formatter<'_>) {
+        match self {
+            Self::Linspace => write!(f, "linspace"),
+            Self::Matlab => write!(f, "matlab"),
+        }
+    }
+}
+
+impl Format for UpperTail {
+    fn format(&self, f: Formatter<'_>) {
+        match self {
+            Self::Zero => write!(f, "zero"),
+            Self::Clamp => write!(f, "clamp"),
+        }
+    }
+}
+
+impl Format for ClassName {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "{=str}", self.as_str())
+    }
+}
+
+impl Format for Settings {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "Settings {{ lambda_ml: {}, lambda_map: {}, edges: {}, upper_tail: {} }}",
+            self.lambda_ml, self.lambda_map, self.edge_mode, self.upper_tail
+        )
+    }
+}
+
+impl Format for Gaussian {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "N(mean {}, var {})", self.mean, self.var)
+    }
+}
+
+impl<F: AsRef<[f32]>> Format for Histogram<F> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "Histogram {{ [{}, {}], {=[?]} }}",
+            self.lo,
+            self.hi,
+            self.freqs.as_ref()
+        )
+    }
+}
+
+impl<const K: usize> Format for Scores<K> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "Scores({=[?]})", &self.0[..])
+    }
+}
+
+impl<const K: usize, const B_ML: usize, const B_MAP: usize> Format for Table<K, B_ML, B_MAP> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "Table<{}, {}, {}> {{ classes: {=[?]}, {} }}",
+            K,
+            B_ML,
+            B_MAP,
+            &self.names[..],
+            self.settings
+        )
+    }
+}
+
+impl Format for crate::Libm {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "Libm")
+    }
+}
+
+#[cfg(feature = "micromath")]
+impl Format for crate::FastMath {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "FastMath")
+    }
+}

@@ -1,0 +1,19 @@
+//! The table embedded at build time (DESIGN §5, way 2).
+//!
+//! `build.rs` reads the table file named by the `MLMAP_TABLE` environment variable
+//! (default: `tables/default.mlmap`, fitted from `examples/data/train.csv`), validates it
+//! with the same code as [`Table::from_bytes`](crate::Table::from_bytes), and writes it
+//! out as Rust constants: the firmware gets a ready [`TABLE`] in flash and pays no
+//! decoding at start-up. An invalid file fails the build, naming the file and the
+//! broken invariant.
+//!
+//! ```
+//! use mlmap::embedded::{TABLE, K};
+//!
+//! let logits = [4.0_f32; K];
+//! let scores = TABLE.ml(&logits, 0.9)?;
+//! assert!((scores.0.iter().sum::<f32>() - 0.9).abs() < 1e-5);
+//! # Ok::<(), mlmap::InferError>(())
+//! ```
+
+include!(concat!(env!("OUT_DIR"), "/embedded_table.rs"));

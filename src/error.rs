@@ -1,0 +1,272 @@
+//! Error types of the layer: one small enum per failure domain.
+//!
+//! Every type here is `Copy`, has a one-sentence [`Display`](core::fmt::Display) per
+//! variant, and implements [`core::error::Error`]. None of them carries a postcard error:
+//! the wire library is an implementation detail.
+
+use core::fmt;
+
+/// Which of the two heads of a table an error refers to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Head {
+    /// The maximum-likelihood head (histogram likelihood only).
+    Ml,
+    /// The maximum a-posteriori head (histogram likelihood times Gaussian prior).
+    Map,
+}
+
+impl fmt::Display for Head {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Ml => "ML",
+            Self::Map => "MAP",
+        })
+    }
+}
+
+/// A broken table invariant (DESIGN §1.3, invariant 5).
+///
+/// Returned when a table is built from parts or decoded from bytes whose contents
+/// violate one of the rules every table obeys.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum TableError {
+    /// The outer edges are not finite, not increasing, or give inner edges that are not
+    /// strictly increasing in `f32`.
+    Edges {
+        /// Head of the histogram.
+        head: Head,
+        /// Class index of the histogram.
+        class: u16,
+    },
+    /// A frequency is negative or not finite, or the frequencies do not sum to 1 within
+    /// [`FREQUENCY_SUM_TOLERANCE`](crate::FREQUENCY_SUM_TOLERANCE).
+    Frequencies {
+        /// Head of the histogram.
+        head: Head,
+        /// Class index of the histogram.
+        class: u16,
+    },
+    /// The histogram has a bin count other than the one the table declares.
+    BinCount {
+        /// Head of the histogram.
+        head: Head,
+        /// Class index of the histogram.
+        class: u16,
+    },
+    /// The prior's mean is not finite.
+    Mean {
+        /// Class index.
+        class: u16,
+    },
+    /// The prior's variance is not finite and positive, or so small that `1 / (2 var)`
+    /// overflows `f32`.
+    Variance {
+        /// Class index.
+        class: u16,
+    },
+    /// A smoothing lambda is not in `(0, MAX_LAMBDA]`.
+    Lambda {
+        /// Head of the lambda.
+        head: Head,
+    },
+    /// A class name is empty, longer than [`NAME_MAX`](crate::NAME_MAX) bytes, or is the
+    /// reserved label `background`.
+    Name {
+        /// Class index.
+        class: u16,
+    },
+    /// Two classes have the same name.
+    DuplicateName {
+        /// Index of the second occurrence.
+        class: u16,
+    },
+    /// The number of classes is below 2 or above `u16::MAX`.
+    ClassCount,
+}
+
+impl fmt::Display for TableError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Edges { head, class } => write!(
+                f,
+                "{head} histogram of class {class}: edges are not finite and strictly increasing"
+            ),
+            Self::Frequencies { head, class } => write!(
+                f,
+                "{head} histogram of class {class}: frequencies are not finite, non-negative and summing to 1"
+            ),
+            Self::BinCount { head, class } => write!(
+                f,
+                "{head} histogram of class {class}: bin count differs from the table's"
+            ),
+            Self::Mean { class } => write!(f, "prior of class {class}: mean is not finite"),
+            Self::Variance { class } => write!(
+                f,
+                "prior of class {class}: variance is not finite and positive (or 1/(2 var) overflows)"
+            ),
+            Self::Lambda { head } => write!(
+                f,
+                "{head} lambda is not in (0, {}]",
+                crate::MAX_LAMBDA
+            ),
+            Self::Name { class } => write!(
+                f,
+                "name of class {class} is empty, longer than {} bytes, or `background`",
+                crate::NAME_MAX
+            ),
+            Self::DuplicateName { class } => {
+                write!(f, "name of class {class} repeats an earlier class name")
+            }
+            Self::ClassCount => f.write_str("a table needs between 2 and 65535 classes"),
+        }
+    }
+}
+
+impl core::error::Error for TableError {}
+
+/// Why a byte string could not become a table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum DecodeError {
+    /// The input is shorter than the smallest possible table.
+    Truncated,
+    /// The bytes do not start with the mlmap magic `MLMP`.
+    NotATable,
+    /// The stored CRC-32 does not match the contents.
+    Corrupted,
+    /// The table was written in a format version this build does not read.
+    UnsupportedVersion {
+        /// Version stored in the bytes.
+        found: u16,
+    },
+    /// The table has another shape than the type it is decoded into.
+    ShapeMismatch {
+        /// `(K, ML bins, MAP bins)` of the destination type.
+        expected: (u16, u16, u16),
+        /// `(K, ML bins, MAP bins)` stored in the table.
+        found: (u16, u16, u16),
+    },
+    /// The checksum matched, but the body does not follow the format (a field is
+    /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over).
+    Malformed,
+    /// The body parsed, but a table invariant does not hold.
+    Invalid(TableError),
+}
+
+impl fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Truncated => f.write_str("input is too short to be an mlmap table"),
+            Self::NotATable => f.write_str("input does not start with the mlmap magic `MLMP`"),
+            Self::Corrupted => f.write_str("table checksum does not match its contents"),
+            Self::UnsupportedVersion { found } => write!(
+                f,
+                "table format version {found} is not supported (this build reads version {})",
+                crate::FORMAT_VERSION
+            ),
+            Self::ShapeMismatch { expected, found } => write!(
+                f,
+                "table has {} classes, {} ML bins and {} MAP bins; expected {}, {} and {}",
+                found.0, found.1, found.2, expected.0, expected.1, expected.2
+            ),
+            Self::Malformed => f.write_str("table body does not follow the mlmap format"),
+            Self::Invalid(e) => write!(f, "invalid table: {e}"),
+        }
+    }
+}
+
+impl core::error::Error for DecodeError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            Self::Invalid(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+impl From<TableError> for DecodeError {
+    fn from(e: TableError) -> Self {
+        Self::Invalid(e)
+    }
+}
+
+/// Why a table could not be encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum EncodeError {
+    /// The output buffer is too small; `MAX_ENCODED_LEN` bytes always suffice.
+    BufferTooSmall,
+}
+
+impl fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::BufferTooSmall => f.write_str("output buffer is too small for the table"),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
+/// Why one detection could not be scored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum InferError {
+    /// A logit is NaN.
+    NanLogit {
+        /// Index of the first NaN logit.
+        class: u16,
+    },
+    /// The objectness is NaN or outside `[0, 1]`.
+    Objectness,
+    /// The logit slice or the output slice does not have one entry per class.
+    Length,
+}
+
+impl fmt::Display for InferError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::NanLogit { class } => write!(f, "logit of class {class} is NaN"),
+            Self::Objectness => f.write_str("objectness is NaN or outside [0, 1]"),
+            Self::Length => f.write_str("logits or output do not have one entry per class"),
+        }
+    }
+}
+
+impl core::error::Error for InferError {}
+
+/// Why a batch could not be scored completely.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum BatchError {
+    /// The input and output slices have different lengths; nothing was written.
+    LengthMismatch,
+    /// Row `index` is invalid. Rows before it were written, rows from it on were not.
+    Row {
+        /// Index of the first invalid row.
+        index: usize,
+        /// What is wrong with it.
+        error: InferError,
+    },
+}
+
+impl fmt::Display for BatchError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::LengthMismatch => {
+                f.write_str("logits, objectness and output slices differ in length")
+            }
+            Self::Row { index, error } => write!(f, "row {index}: {error}"),
+        }
+    }
+}
+
+impl core::error::Error for BatchError {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            Self::Row { error, .. } => Some(error),
+            Self::LengthMismatch => None,
+        }
+    }
+}

@@ -1,0 +1,103 @@
+//! ML and MAP prediction layers for object detectors, for firmware: they never
+//! allocate, never panic and run in bounded time.
+//!
+//! A detector's Sigmoid or Softmax layer reports false positives and never-seen objects
+//! at 0.95+ confidence. mlmap replaces that layer, after training and without
+//! retraining, by the **ML** and **MAP** layers of Melotti et al., "Probabilistic
+//! Approach for Road-Users Detection": per-class histograms of training logits as the
+//! likelihood, a per-class Gaussian as the prior, additive smoothing, times the
+//! objectness. A logit vector unlike anything seen in training gets `OS / K` per class:
+//! "I don't know".
+//!
+//! The library is `#![no_std]` and never uses `alloc`. Tables are fixed-size
+//! ([`Table<K, B_ML, B_MAP>`](Table)) and reach the firmware either as bytes decoded at
+//! start-up or as constants generated at build time. The promises are checked: panic
+//! paths by a link-time test, allocation by `nm`, the invariants of every score by
+//! property tests and fuzzing (see the README).
+//!
+//! # Decoding a table at start-up
+//!
+//! ```
+//! use mlmap::Table;
+//!
+//! // E.g. a calibration flash sector, updatable without reflashing the code.
+//! static TABLE_BYTES: &[u8] = include_bytes!("../tables/default.mlmap");
+//!
+//! let table = Table::<3, 22, 17>::from_bytes(TABLE_BYTES)?; // CRC + invariants checked
+//! let scores = table.map(&[5.1, -2.0, -1.3], 0.93)?;
+//! let class = table.class_name(scores.argmax());
+//! # assert!(class.is_some());
+//! # Ok::<(), Box<dyn core::error::Error>>(())
+//! ```
+//!
+//! # Using the table embedded at build time
+//!
+//! ```
+//! use mlmap::embedded::TABLE;
+//!
+//! let scores = TABLE.ml(&[5.1, -2.0, -1.3], 0.93)?; // no decoding, no copy
+//! assert!((scores.0.iter().sum::<f32>() - 0.93).abs() < 1e-5);
+//! # Ok::<(), mlmap::InferError>(())
+//! ```
+//!
+//! # Features
+//!
+//! * `micromath`: adds the [`FastMath`] backend (`table.map_with::<FastMath>(..)`).
+//! * `defmt`: `defmt::Format` for every public type.
+//! * `std`: the host module [`host`] (fitting, datasets, metrics, [`DynTable`]).
+//! * `cli`: the `mlmap` companion binary.
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
+// `!(a < b)` is deliberate throughout: it is true for NaN, which must be rejected.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+#[cfg(any(test, feature = "std"))]
+extern crate std;
+
+pub mod baseline;
+#[cfg(feature = "defmt")]
+mod defmt_impls;
+#[cfg(feature = "std")]
+mod dyn_table;
+pub mod embedded;
+mod error;
+#[cfg(feature = "micromath")]
+mod fastmath;
+mod gaussian;
+mod histogram;
+mod layer;
+mod math;
+mod name;
+mod table;
+mod wire;
+
+pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
+pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
+pub use histogram::{EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE};
+pub use layer::{argmax, Scores};
+pub use math::{Backend, Libm};
+pub use name::{ClassName, NAME_MAX};
+pub use table::Table;
+pub use wire::{max_encoded_len, ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
+
+#[cfg(feature = "micromath")]
+#[cfg_attr(docsrs, doc(cfg(feature = "micromath")))]
+pub use fastmath::{FastMath, FAST_MATH_MAX_SCORE_ERROR};
+
+/// Host-side tools: fitting, datasets, baselines, metrics (feature `std`).
+#[cfg(feature = "std")]
+#[cfg_attr(docsrs, doc(cfg(feature = "std")))]
+pub mod host {
+    pub use crate::dyn_table::DynTable;
+}

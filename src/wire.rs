@@ -1,0 +1,395 @@
+//! The `.mlmap` wire format, version 1 (`docs/FORMAT.md` is the normative description).
+//!
+//! A table is one postcard message followed by a CRC-32:
+//!
+//! ```text
+//! Header   magic "MLMP" (4 raw bytes), version, K, ML bins, MAP bins (varint u16 each)
+//! Settings edge mode (u8), upper tail (u8), lambda ML (f32 LE), lambda MAP (f32 LE)
+//! Classes  varint K, then per class: name (varint length + UTF-8), rows (varint u64),
+//!          mean, variance, ML lo, ML hi (f32 LE), ML frequencies (varint B + B f32 LE),
+//!          MAP lo, MAP hi (f32 LE), MAP frequencies (varint B + B f32 LE)
+//! CRC      CRC-32/ISO-HDLC (zlib's crc32) of every byte before it, 4 bytes LE
+//! ```
+//!
+//! This module is shared by the layer, the host table and `build.rs`; it depends on
+//! nothing but `core`, serde and postcard, and never allocates: the class sequence type
+//! `C` is chosen by the caller (`heapless::Vec` on the device, `Vec` on the host).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{DecodeError, EncodeError, Head, TableError};
+use crate::gaussian::{Gaussian, GaussianError};
+use crate::histogram::{EdgeMode, Histogram, HistogramError, UpperTail};
+use crate::name::{ClassName, NAME_MAX};
+
+/// The four bytes every table starts with.
+pub const MAGIC: [u8; 4] = *b"MLMP";
+
+/// The format version this build writes and reads.
+pub const FORMAT_VERSION: u16 = 1;
+
+/// Largest smoothing lambda a table may hold. Frequencies are at most 1 and priors at
+/// most about `4e18`, so with `lambda <= 1e6` no sum of K terms can overflow `f32`.
+pub const MAX_LAMBDA: f32 = 1.0e6;
+
+/// The checksum: CRC-32/ISO-HDLC, the CRC of zlib, PNG and Ethernet.
+pub(crate) const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// Length of the trailing checksum.
+const CRC_LEN: usize = 4;
+
+/// Hyper-parameters and policies of a table (everything but the per-class statistics).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Settings {
+    /// Additive smoothing of the ML head, in `(0, MAX_LAMBDA]`.
+    pub lambda_ml: f32,
+    /// Additive smoothing of the MAP head, in `(0, MAX_LAMBDA]`.
+    pub lambda_map: f32,
+    /// How the fit placed the edges (informational).
+    pub edge_mode: EdgeMode,
+    /// What the likelihood is above the last edge.
+    pub upper_tail: UpperTail,
+}
+
+impl Settings {
+    /// Checks both lambdas.
+    pub(crate) fn validate(&self) -> Result<(), TableError> {
+        let ok = |l: f32| l > 0.0 && l <= MAX_LAMBDA;
+        if !ok(self.lambda_ml) {
+            return Err(TableError::Lambda { head: Head::Ml });
+        }
+        if !ok(self.lambda_map) {
+            return Err(TableError::Lambda { head: Head::Map });
+        }
+        Ok(())
+    }
+}
+
+/// The statistics of one class, as fitted, before validation.
+///
+/// `F` and `G` hold the ML and MAP frequencies (`[f32; B]` for a [`Table`](crate::Table),
+/// `Vec<f32>` on the host).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClassSpec<'a, F, G> {
+    /// Class name (see [`ClassName::new`] for the rules).
+    pub name: &'a str,
+    /// Number of training rows the class was fitted from (provenance).
+    pub rows: u64,
+    /// Mean of the Gaussian prior.
+    pub mean: f32,
+    /// Variance of the Gaussian prior (> 0).
+    pub variance: f32,
+    /// First and last edge of the ML histogram.
+    pub ml_range: (f32, f32),
+    /// Frequencies of the ML histogram.
+    pub ml_freqs: F,
+    /// First and last edge of the MAP histogram.
+    pub map_range: (f32, f32),
+    /// Frequencies of the MAP histogram.
+    pub map_freqs: G,
+}
+
+/// A validated class: name, provenance, prior and both histograms.
+pub(crate) struct ValidClass<F, G> {
+    pub(crate) name: ClassName,
+    pub(crate) rows: u64,
+    pub(crate) prior: Gaussian,
+    pub(crate) ml: Histogram<F>,
+    pub(crate) map: Histogram<G>,
+}
+
+impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> ClassSpec<'a, F, G> {
+    /// Validates class `i` against every per-class invariant; bin counts must be
+    /// `bins_ml` and `bins_map`.
+    pub(crate) fn validate(
+        self,
+        i: usize,
+        bins_ml: usize,
+        bins_map: usize,
+    ) -> Result<ValidClass<F, G>, TableError> {
+        let class = u16::try_from(i).map_err(|_| TableError::ClassCount)?;
+        let name = ClassName::new(self.name).ok_or(TableError::Name { class })?;
+        if self.ml_freqs.as_ref().len() != bins_ml {
+            return Err(TableError::BinCount {
+                head: Head::Ml,
+                class,
+            });
+        }
+        if self.map_freqs.as_ref().len() != bins_map {
+            return Err(TableError::BinCount {
+                head: Head::Map,
+                class,
+            });
+        }
+        let hist_err = |head| {
+            move |e| match e {
+                HistogramError::Edges => TableError::Edges { head, class },
+                HistogramError::Frequencies => TableError::Frequencies { head, class },
+            }
+        };
+        let ml = Histogram::new(self.ml_range.0, self.ml_range.1, self.ml_freqs)
+            .map_err(hist_err(Head::Ml))?;
+        let map = Histogram::new(self.map_range.0, self.map_range.1, self.map_freqs)
+            .map_err(hist_err(Head::Map))?;
+        let prior = Gaussian::new(self.mean, self.variance).map_err(|e| match e {
+            GaussianError::Mean => TableError::Mean { class },
+            GaussianError::Variance => TableError::Variance { class },
+        })?;
+        Ok(ValidClass {
+            name,
+            rows: self.rows,
+            prior,
+            ml,
+            map,
+        })
+    }
+}
+
+/// Checks that no name repeats an earlier one (O(K^2), decode time only).
+pub(crate) fn check_unique_names(names: &[ClassName]) -> Result<(), TableError> {
+    for (i, n) in names.iter().enumerate() {
+        if names.iter().take(i).any(|m| m == n) {
+            return Err(TableError::DuplicateName {
+                class: u16::try_from(i).unwrap_or(u16::MAX),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The fixed part at the start of every table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub(crate) struct Header {
+    pub(crate) magic: [u8; 4],
+    pub(crate) version: u16,
+    pub(crate) k: u16,
+    pub(crate) bins_ml: u16,
+    pub(crate) bins_map: u16,
+}
+
+impl Header {
+    /// `(K, ML bins, MAP bins)`.
+    pub(crate) fn shape(&self) -> (u16, u16, u16) {
+        (self.k, self.bins_ml, self.bins_map)
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+struct SettingsWire {
+    edge_mode: u8,
+    upper_tail: u8,
+    lambda_ml: f32,
+    lambda_map: f32,
+}
+
+impl SettingsWire {
+    fn from_settings(s: &Settings) -> Self {
+        Self {
+            edge_mode: match s.edge_mode {
+                EdgeMode::Linspace => 0,
+                EdgeMode::Matlab => 1,
+            },
+            upper_tail: match s.upper_tail {
+                UpperTail::Zero => 0,
+                UpperTail::Clamp => 1,
+            },
+            lambda_ml: s.lambda_ml,
+            lambda_map: s.lambda_map,
+        }
+    }
+
+    fn to_settings(&self) -> Result<Settings, DecodeError> {
+        let edge_mode = match self.edge_mode {
+            0 => EdgeMode::Linspace,
+            1 => EdgeMode::Matlab,
+            _ => return Err(DecodeError::Malformed),
+        };
+        let upper_tail = match self.upper_tail {
+            0 => UpperTail::Zero,
+            1 => UpperTail::Clamp,
+            _ => return Err(DecodeError::Malformed),
+        };
+        let s = Settings {
+            lambda_ml: self.lambda_ml,
+            lambda_map: self.lambda_map,
+            edge_mode,
+            upper_tail,
+        };
+        s.validate()?;
+        Ok(s)
+    }
+}
+
+/// One class on the wire; `V`, `W` are the frequency sequences.
+#[derive(Serialize, Deserialize)]
+pub(crate) struct ClassWire<'a, V, W> {
+    #[serde(borrow)]
+    name: &'a str,
+    rows: u64,
+    mean: f32,
+    variance: f32,
+    ml_lo: f32,
+    ml_hi: f32,
+    ml_freqs: V,
+    map_lo: f32,
+    map_hi: f32,
+    map_freqs: W,
+}
+
+impl<'a, V, W> ClassWire<'a, V, W> {
+    pub(crate) fn into_spec(self) -> ClassSpec<'a, V, W> {
+        ClassSpec {
+            name: self.name,
+            rows: self.rows,
+            mean: self.mean,
+            variance: self.variance,
+            ml_range: (self.ml_lo, self.ml_hi),
+            ml_freqs: self.ml_freqs,
+            map_range: (self.map_lo, self.map_hi),
+            map_freqs: self.map_freqs,
+        }
+    }
+}
+
+/// Everything after the header and before the CRC.
+#[derive(Deserialize)]
+struct BodyWire<C> {
+    settings: SettingsWire,
+    classes: C,
+}
+
+/// Checks magic, checksum and version; returns the header and the body bytes.
+pub(crate) fn open(bytes: &[u8]) -> Result<(Header, &[u8]), DecodeError> {
+    let prefix = bytes.get(..MAGIC.len()).unwrap_or(bytes);
+    if prefix != MAGIC.get(..prefix.len()).unwrap_or(&MAGIC) {
+        return Err(DecodeError::NotATable);
+    }
+    if bytes.len() < MIN_ENCODED_LEN {
+        return Err(DecodeError::Truncated);
+    }
+    let (payload, stored) = bytes.split_at(bytes.len() - CRC_LEN);
+    let mut crc = [0u8; CRC_LEN];
+    for (d, s) in crc.iter_mut().zip(stored) {
+        *d = *s;
+    }
+    if CRC.checksum(payload) != u32::from_le_bytes(crc) {
+        return Err(DecodeError::Corrupted);
+    }
+    let (header, body) =
+        postcard::take_from_bytes::<Header>(payload).map_err(|_| DecodeError::Malformed)?;
+    if header.version != FORMAT_VERSION {
+        return Err(DecodeError::UnsupportedVersion {
+            found: header.version,
+        });
+    }
+    Ok((header, body))
+}
+
+/// Parses the body into settings and the class sequence `C`; every byte must be used.
+pub(crate) fn parse_body<'a, C: Deserialize<'a>>(
+    body: &'a [u8],
+) -> Result<(Settings, C), DecodeError> {
+    let (wire, rest) =
+        postcard::take_from_bytes::<BodyWire<C>>(body).map_err(|_| DecodeError::Malformed)?;
+    if !rest.is_empty() {
+        return Err(DecodeError::Malformed);
+    }
+    Ok((wire.settings.to_settings()?, wire.classes))
+}
+
+/// Serialises the classes `0..k` produced by `class` as one postcard sequence.
+struct ClassSeq<F> {
+    k: usize,
+    class: F,
+}
+
+impl<'a, F> Serialize for ClassSeq<F>
+where
+    F: Fn(usize) -> Option<ClassWire<'a, &'a [f32], &'a [f32]>>,
+{
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::{Error, SerializeSeq};
+        let mut seq = s.serialize_seq(Some(self.k))?;
+        for i in 0..self.k {
+            let class = (self.class)(i).ok_or_else(|| S::Error::custom("class out of range"))?;
+            seq.serialize_element(&class)?;
+        }
+        seq.end()
+    }
+}
+
+#[derive(Serialize)]
+struct MessageRef<'s, C> {
+    header: Header,
+    settings: SettingsWire,
+    classes: &'s C,
+}
+
+/// Encodes a validated table given by its shape, settings and a per-class view.
+pub(crate) fn encode<'a, 'b, F>(
+    shape: (u16, u16, u16),
+    settings: &Settings,
+    class: F,
+    buf: &'b mut [u8],
+) -> Result<&'b mut [u8], EncodeError>
+where
+    F: Fn(usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>>,
+{
+    let classes = ClassSeq {
+        k: usize::from(shape.0),
+        class: |i| {
+            let c = class(i)?;
+            Some(ClassWire {
+                name: c.name,
+                rows: c.rows,
+                mean: c.mean,
+                variance: c.variance,
+                ml_lo: c.ml_range.0,
+                ml_hi: c.ml_range.1,
+                ml_freqs: c.ml_freqs,
+                map_lo: c.map_range.0,
+                map_hi: c.map_range.1,
+                map_freqs: c.map_freqs,
+            })
+        },
+    };
+    let msg = MessageRef {
+        header: Header {
+            magic: MAGIC,
+            version: FORMAT_VERSION,
+            k: shape.0,
+            bins_ml: shape.1,
+            bins_map: shape.2,
+        },
+        settings: SettingsWire::from_settings(settings),
+        classes: &classes,
+    };
+    postcard::to_slice_crc32(&msg, buf, CRC.digest()).map_err(|_| EncodeError::BufferTooSmall)
+}
+
+/// Bytes a postcard varint needs for `n`.
+const fn varint_len(n: usize) -> usize {
+    let mut len = 1;
+    let mut v = n >> 7;
+    while v > 0 {
+        len += 1;
+        v >>= 7;
+    }
+    len
+}
+
+/// Shortest possible table: magic, one-byte version and shape, settings, K = 0, CRC.
+const MIN_ENCODED_LEN: usize = MAGIC.len() + 4 + 10 + 1 + CRC_LEN;
+
+/// Upper bound of the encoded size of a table with `k` classes and the given bin counts
+/// (every name [`NAME_MAX`] bytes, every row count the largest `u64`).
+pub const fn max_encoded_len(k: usize, bins_ml: usize, bins_map: usize) -> usize {
+    let header = MAGIC.len() + 4 * varint_len(u16::MAX as usize);
+    let settings = 2 + 4 + 4;
+    let per_class = varint_len(NAME_MAX) + NAME_MAX
+        + 10 // rows, varint u64
+        + 4 * 2 // mean, variance
+        + 4 * 2 + varint_len(bins_ml) + 4 * bins_ml
+        + 4 * 2 + varint_len(bins_map) + 4 * bins_map;
+    header + settings + varint_len(k) + k * per_class + CRC_LEN
+}
