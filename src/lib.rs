@@ -95,9 +95,6 @@ pub use wire::{max_encoded_len, ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_
 #[cfg_attr(docsrs, doc(cfg(feature = "micromath")))]
 pub use fastmath::{FastMath, FAST_MATH_MAX_SCORE_ERROR};
 
-/// Host-side tools: fitting, datasets, baselines, metrics (feature `std`).
 #[cfg(feature = "std")]
 #[cfg_attr(docsrs, doc(cfg(feature = "std")))]
-pub mod host {
-    pub use crate::dyn_table::DynTable;
-}
+pub mod host;
