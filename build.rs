@@ -85,7 +85,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let bytes = fs::read(&path).map_err(|e| fail(e.to_string()))?;
     let table = dyn_table::DynTable::from_bytes(&bytes).map_err(|e| fail(e.to_string()))?;
-    let code = render(&table, &path.display().to_string(), &bytes);
+    // Name the source relative to the package when it is inside it (reproducible builds).
+    let shown = path
+        .strip_prefix(&manifest)
+        .unwrap_or(&path)
+        .display()
+        .to_string();
+    let code = render(&table, &shown, &bytes);
     let out = PathBuf::from(env::var("OUT_DIR")?).join("embedded_table.rs");
     fs::write(out, code)?;
     Ok(())
