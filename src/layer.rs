@@ -179,6 +179,49 @@ pub(crate) fn map_into<F: AsRef<[f32]>, M: Backend>(
     Ok(())
 }
 
+/// Scores from per-class evidence, with the layer's exact arithmetic.
+///
+/// `evidence[i]` is `L_i` (ML head) or `L_i * P_i` (MAP head) as the layer computes
+/// it; `out[i]` receives `OS * (e_i + lambda) / sum_j (e_j + lambda)`, or exactly
+/// `OS / K` when every `e_i` is 0. A host tuner that has looked up the likelihoods once
+/// can re-score them for many lambdas and get bit for bit what the layer would return.
+/// `scratch` is any K floats.
+///
+/// # Errors
+///
+/// [`InferError::Length`] when the slices differ in length or are empty;
+/// [`InferError::Objectness`] for an objectness outside `[0, 1]`.
+///
+/// # Panics
+///
+/// Never.
+pub fn scores_from_evidence(
+    evidence: &[f32],
+    lambda: f32,
+    objectness: f32,
+    out: &mut [f32],
+    scratch: &mut [f32],
+) -> Result<(), InferError> {
+    let k = evidence.len();
+    if k == 0 || out.len() != k || scratch.len() != k {
+        return Err(InferError::Length);
+    }
+    if !(0.0..=1.0).contains(&objectness) {
+        return Err(InferError::Objectness);
+    }
+    let mut any = false;
+    for (o, &e) in out.iter_mut().zip(evidence) {
+        any |= e > 0.0;
+        *o = e + lambda;
+    }
+    if any {
+        normalise(out, scratch, objectness);
+    } else {
+        uniform(out, objectness);
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
