@@ -6,3 +6,4 @@
 //! exactly what the device computes.
 
 pub use crate::dyn_table::DynTable;
+pub mod tune;

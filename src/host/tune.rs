@@ -1,0 +1,378 @@
+//! Hyper-parameter search for both heads (`mlmap tune`).
+//!
+//! The ML head depends only on `(B_ML, lambda_ML)` and the MAP head only on
+//! `(B_MAP, lambda_MAP)`, so each head is searched on its own grid. The expensive parts
+//! are done once: the Gaussian prior of every validation logit once for the whole
+//! search, the likelihoods once per bin count (one histogram lookup per class and row).
+//! Each lambda candidate is then one pass of additions and the layer's own
+//! normalisation ([`scores_from_evidence`]), so a candidate's scores are bit for bit
+//! the scores the layer will produce with the written table. The objective is
+//! accumulated on the fly, without storing scores.
+
+use std::prelude::rust_2021::*;
+use std::{format, vec};
+
+use crate::{scores_from_evidence, Gaussian, Histogram, Libm, UpperTail};
+
+/// What the search minimises.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Objective {
+    /// Expected calibration error, 10 bins `((m-1)/M, m/M]` (DESIGN §1.5 default).
+    Ece,
+    /// Mean negative log-likelihood of the labelled rows.
+    Nll,
+    /// Mean Brier score over all rows.
+    Brier,
+}
+
+/// Validation rows, in the layer's precision.
+#[derive(Debug, Clone, Copy)]
+pub struct ValRows<'a> {
+    /// Number of classes K.
+    pub k: usize,
+    /// N x K logits, row-major.
+    pub logits: &'a [f32],
+    /// N objectness scores.
+    pub objectness: &'a [f32],
+    /// N labels: `Some(class)` or `None` for background.
+    pub labels: &'a [Option<usize>],
+}
+
+/// One scored grid point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// Bin count.
+    pub bins: usize,
+    /// Smoothing lambda (as stored in the table, `f32`).
+    pub lambda: f32,
+    /// Expected calibration error (10 bins, DESIGN default binning).
+    pub ece: f64,
+    /// Mean NLL of the labelled rows (`None` without labelled rows).
+    pub nll: Option<f64>,
+    /// Mean Brier score.
+    pub brier: f64,
+}
+
+impl Candidate {
+    /// The value of `objective` (lower is better; a missing NLL is +inf).
+    pub fn value(&self, objective: Objective) -> f64 {
+        match objective {
+            Objective::Ece => self.ece,
+            Objective::Nll => self.nll.unwrap_or(f64::INFINITY),
+            Objective::Brier => self.brier,
+        }
+    }
+}
+
+/// Why a search could not run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum TuneError {
+    /// The validation set is empty or its slices disagree in length.
+    BadValidationSet(String),
+    /// The grid is empty.
+    EmptyGrid,
+    /// A histogram could not be built for a bin count.
+    Histogram(String),
+}
+
+impl std::fmt::Display for TuneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::BadValidationSet(m) => write!(f, "validation set: {m}"),
+            Self::EmptyGrid => f.write_str("the search grid is empty"),
+            Self::Histogram(m) => f.write_str(m),
+        }
+    }
+}
+
+impl std::error::Error for TuneError {}
+
+/// Parses a bin-count set: `N`, `A..B` (inclusive) or `A,B,C`; every count >= 1.
+///
+/// # Errors
+///
+/// A message naming what is wrong.
+pub fn parse_bins(spec: &str) -> Result<Vec<usize>, String> {
+    let num = |s: &str| -> Result<usize, String> {
+        let n: usize = s.trim().parse().map_err(|_| format!("`{s}` is not a bin count"))?;
+        if n == 0 || n > usize::from(u16::MAX) {
+            return Err(format!("bin count {n} is not in 1..=65535"));
+        }
+        Ok(n)
+    };
+    let mut out: Vec<usize> = if let Some((a, b)) = spec.split_once("..") {
+        let (a, b) = (num(a)?, num(b.trim_start_matches('='))?);
+        if a > b {
+            return Err(format!("empty range `{spec}`"));
+        }
+        (a..=b).collect()
+    } else {
+        spec.split(',').map(num).collect::<Result<_, _>>()?
+    };
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
+}
+
+/// A log-spaced grid from `min` to `max` inclusive with `per_decade` points per decade,
+/// rounded to `f32` (the precision the table stores).
+///
+/// # Errors
+///
+/// When the bounds are not `0 < min <= max <= MAX_LAMBDA` or `per_decade` is 0.
+pub fn lambda_grid(min: f64, max: f64, per_decade: usize) -> Result<Vec<f32>, String> {
+    if !(min > 0.0 && min <= max && max <= f64::from(crate::MAX_LAMBDA)) || per_decade == 0 {
+        return Err(format!(
+            "lambda grid needs 0 < min <= max <= {} and at least one point per decade",
+            crate::MAX_LAMBDA
+        ));
+    }
+    let decades = (max / min).log10();
+    let steps = (decades * per_decade as f64).round() as usize;
+    let mut out: Vec<f32> = (0..=steps)
+        .map(|s| {
+            let t = if steps == 0 { 0.0 } else { s as f64 / steps as f64 };
+            (min * (max / min).powf(t)) as f32
+        })
+        .filter(|&l| l > 0.0)
+        .collect();
+    out.dedup();
+    Ok(out)
+}
+
+/// Running sums of the three objectives over the rows of one candidate.
+struct Accumulator {
+    bins: [(u64, f64, f64); ECE_BINS],
+    n: u64,
+    nll_sum: f64,
+    nll_n: u64,
+    brier_sum: f64,
+}
+
+/// ECE bins of the tuning objective (DESIGN §1.5 default).
+const ECE_BINS: usize = 10;
+
+/// Index (0-based) of the bin `((m-1)/M, m/M]` holding `conf`, conf = 0 in the first;
+/// edges are evaluated in f64 as `m / M`, exactly as the metric defines them.
+pub(crate) fn ece_bin(conf: f64, m_bins: usize) -> usize {
+    let m = m_bins as f64;
+    let mut b = (conf * m).ceil().clamp(1.0, m) as usize;
+    while b > 1 && conf <= (b - 1) as f64 / m {
+        b -= 1;
+    }
+    while b < m_bins && conf > b as f64 / m {
+        b += 1;
+    }
+    b - 1
+}
+
+impl Accumulator {
+    fn new() -> Self {
+        Self {
+            bins: [(0, 0.0, 0.0); ECE_BINS],
+            n: 0,
+            nll_sum: 0.0,
+            nll_n: 0,
+            brier_sum: 0.0,
+        }
+    }
+
+    fn add(&mut self, scores: &[f32], label: Option<usize>) {
+        let best = crate::argmax(scores);
+        let conf = f64::from(scores.get(best).copied().unwrap_or(0.0));
+        let correct = label == Some(best);
+        if let Some(bin) = self.bins.get_mut(ece_bin(conf, ECE_BINS)) {
+            bin.0 += 1;
+            bin.1 += conf;
+            bin.2 += if correct { 1.0 } else { 0.0 };
+        }
+        self.n += 1;
+        if let Some(l) = label {
+            let s = f64::from(scores.get(l).copied().unwrap_or(0.0));
+            self.nll_sum -= s.max(1e-12).ln();
+            self.nll_n += 1;
+        }
+        for (i, &s) in scores.iter().enumerate() {
+            let y = if label == Some(i) { 1.0 } else { 0.0 };
+            let d = f64::from(s) - y;
+            self.brier_sum += d * d;
+        }
+    }
+
+    fn finish(&self, bins: usize, lambda: f32) -> Candidate {
+        let n = self.n.max(1) as f64;
+        let ece = self
+            .bins
+            .iter()
+            .filter(|b| b.0 > 0)
+            .map(|&(c, conf, acc)| (c as f64 / n) * (acc / c as f64 - conf / c as f64).abs())
+            .sum();
+        Candidate {
+            bins,
+            lambda,
+            ece,
+            nll: (self.nll_n > 0).then(|| self.nll_sum / self.nll_n as f64),
+            brier: self.brier_sum / n,
+        }
+    }
+}
+
+/// Scores every lambda for one head given the per-row evidence (N x K).
+fn sweep(
+    val: &ValRows<'_>,
+    evidence: &[f32],
+    bins: usize,
+    lambdas: &[f32],
+    out: &mut Vec<Candidate>,
+) {
+    let k = val.k;
+    let mut scores = vec![0.0f32; k];
+    let mut scratch = vec![0.0f32; k];
+    for &lambda in lambdas {
+        let mut acc = Accumulator::new();
+        for ((e, &os), &label) in evidence
+            .chunks_exact(k)
+            .zip(val.objectness)
+            .zip(val.labels)
+        {
+            if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
+                acc.add(&scores, label);
+            }
+        }
+        out.push(acc.finish(bins, lambda));
+    }
+}
+
+/// The search's result: every candidate of each head, best first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TuneResult {
+    /// ML candidates, best first.
+    pub ml: Vec<Candidate>,
+    /// MAP candidates, best first.
+    pub map: Vec<Candidate>,
+}
+
+/// Searches both heads.
+///
+/// `histograms(b)` returns the K fitted histograms with `b` bins (called once per
+/// distinct bin count); `priors` are the K fitted Gaussians. `progress(done, total)` is
+/// called after each bin count.
+///
+/// # Errors
+///
+/// [`TuneError`] for an inconsistent validation set, an empty grid, or a failing
+/// `histograms`.
+#[allow(clippy::too_many_arguments)]
+pub fn search<H>(
+    mut histograms: H,
+    priors: &[Gaussian],
+    tail: UpperTail,
+    val: &ValRows<'_>,
+    bins_ml: &[usize],
+    bins_map: &[usize],
+    lambdas: &[f32],
+    objective: Objective,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<TuneResult, TuneError>
+where
+    H: FnMut(usize) -> Result<Vec<Histogram<Vec<f32>>>, String>,
+{
+    let k = val.k;
+    let n = val.labels.len();
+    if k < 2 || priors.len() != k || val.logits.len() != n * k || val.objectness.len() != n {
+        return Err(TuneError::BadValidationSet(
+            "logits, objectness, labels and priors disagree in size".into(),
+        ));
+    }
+    if n == 0 {
+        return Err(TuneError::BadValidationSet("no rows".into()));
+    }
+    if lambdas.is_empty() || (bins_ml.is_empty() && bins_map.is_empty()) {
+        return Err(TuneError::EmptyGrid);
+    }
+    // The prior of every validation logit, once.
+    let pdf: Vec<f32> = val
+        .logits
+        .chunks_exact(k)
+        .flat_map(|row| row.iter().zip(priors).map(|(&x, g)| g.pdf::<Libm>(x)))
+        .collect();
+    let mut all: Vec<usize> = bins_ml.iter().chain(bins_map).copied().collect();
+    all.sort_unstable();
+    all.dedup();
+    let mut ml = Vec::new();
+    let mut map = Vec::new();
+    let mut evidence = vec![0.0f32; n * k];
+    for (done, &b) in all.iter().enumerate() {
+        let hists = histograms(b).map_err(TuneError::Histogram)?;
+        if hists.len() != k {
+            return Err(TuneError::Histogram(format!("{b} bins: expected {k} histograms")));
+        }
+        for (e_row, x_row) in evidence.chunks_exact_mut(k).zip(val.logits.chunks_exact(k)) {
+            for ((e, &x), h) in e_row.iter_mut().zip(x_row).zip(&hists) {
+                *e = h.likelihood(x, tail);
+            }
+        }
+        if bins_ml.contains(&b) {
+            sweep(val, &evidence, b, lambdas, &mut ml);
+        }
+        if bins_map.contains(&b) {
+            // The MAP evidence L * P, computed as the layer does (P only where L > 0).
+            for (e, &p) in evidence.iter_mut().zip(&pdf) {
+                *e = if *e > 0.0 { *e * p } else { 0.0 };
+            }
+            sweep(val, &evidence, b, lambdas, &mut map);
+        }
+        progress(done + 1, all.len());
+    }
+    let key = |c: &Candidate| c.value(objective);
+    ml.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    map.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    Ok(TuneResult { ml, map })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bin_sets() {
+        assert_eq!(parse_bins("22").unwrap(), [22]);
+        assert_eq!(parse_bins("4..7").unwrap(), [4, 5, 6, 7]);
+        assert_eq!(parse_bins("4..=5").unwrap(), [4, 5]);
+        assert_eq!(parse_bins("17, 5,17").unwrap(), [5, 17]);
+        assert!(parse_bins("0").is_err());
+        assert!(parse_bins("9..3").is_err());
+        assert!(parse_bins("x").is_err());
+    }
+
+    #[test]
+    fn lambda_grid_is_log_spaced() {
+        let g = lambda_grid(1e-8, 1e-1, 1).unwrap();
+        assert_eq!(g.len(), 8);
+        for (i, &l) in g.iter().enumerate() {
+            let want = 10f64.powi(i as i32 - 8);
+            assert!((f64::from(l) - want).abs() / want < 1e-6, "{l} vs {want}");
+        }
+        assert!(lambda_grid(0.0, 1.0, 3).is_err());
+        assert!(lambda_grid(1.0, 0.1, 3).is_err());
+    }
+
+    #[test]
+    fn ece_bins_follow_float64_edges() {
+        // (conf, 0-based bin) for M = 10: edges m/10 belong to the bin they close.
+        let cases = [
+            (0.0, 0),
+            (0.05, 0),
+            (0.1, 0),
+            (0.1000001, 1),
+            (0.3, 2),
+            (0.7, 6),
+            (0.9, 8),
+            (0.95, 9),
+            (1.0, 9),
+        ];
+        for (c, want) in cases {
+            assert_eq!(ece_bin(c, 10), want, "conf {c}");
+        }
+    }
+}
