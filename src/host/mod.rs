@@ -6,3 +6,7 @@
 //! exactly what the device computes.
 
 pub use crate::dyn_table::DynTable;
+
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
+pub mod plots;
