@@ -6,4 +6,9 @@
 //! exactly what the device computes.
 
 pub use crate::dyn_table::DynTable;
+
 pub mod tune;
+
+#[cfg(feature = "cli")]
+#[cfg_attr(docsrs, doc(cfg(feature = "cli")))]
+pub mod plots;
