@@ -44,7 +44,7 @@
 //!
 //! * `micromath`: adds the [`FastMath`] backend (`table.map_with::<FastMath>(..)`).
 //! * `defmt`: `defmt::Format` for every public type.
-//! * `std`: the host module [`host`] (fitting, datasets, metrics, [`DynTable`]).
+//! * `std`: the host module [`host`] (fitting, datasets, metrics, [`DynTable`](host::DynTable)).
 //! * `cli`: the `mlmap` companion binary.
 #![no_std]
 #![forbid(unsafe_code)]
