@@ -1,1 +1,6 @@
-
+// Reading CSV files and NPY directories: valid inputs and every malformed case (DESIGN §2).
+#[cfg(feature = "std")]
+mod host_data;
+// Fitting tables: golden tables from tools/, MATLAB's bin picker, floors and errors (DESIGN §1.1).
+#[cfg(feature = "std")]
+mod host_fit;

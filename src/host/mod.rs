@@ -7,6 +7,10 @@
 
 pub use crate::dyn_table::DynTable;
 
+
+pub mod dataset;
+pub mod fit;
+
 pub mod tune;
 
 #[cfg(feature = "cli")]

@@ -1,0 +1,219 @@
+//! Reading the data files of DESIGN §2: a CSV file or an NPY directory, streamed.
+//!
+//! [`DataSource::open`] reads only the header (CSV) or the array headers (NPY) and
+//! checks them; [`DataSource::for_each_row`] then streams the rows through a closure,
+//! with memory that does not grow with the row count. It can be called again for a
+//! second pass (fitting needs two); every pass reopens the files.
+//!
+//! # CSV
+//!
+//! A header row; a column `label` (a class name, `background`, or empty when unknown);
+//! optionally `objectness` (default 1.0 when the column is absent) and `id` (carried as
+//! text); every other column is the logit of the class it names, in order. Fields are
+//! trimmed of surrounding whitespace; lines end with LF or CRLF; blank lines are
+//! skipped.
+//!
+//! # NPY directory
+//!
+//! `logits.npy` (N x K, float32 or float64, C order); optionally `labels.npy` (N
+//! integers of any integer dtype, `-1` = background), `objectness.npy` (N floats) and
+//! `classes.txt` (K names, one a line; default `class0` .. `class{K-1}`).
+//!
+//! # What is refused
+//!
+//! Everything DESIGN §2 calls malformed, as a [`DataError`] naming the file, the line
+//! (CSV) or row index (NPY) and the column: missing or extra fields, text in a number,
+//! a label that is not a class, a NaN or infinite logit, an objectness that is NaN or
+//! outside `[0, 1]`, an empty field where a number is needed, fewer than 2 classes,
+//! repeated column names, a class named `background` or longer than
+//! [`NAME_MAX`](crate::NAME_MAX) bytes, empty, missing or unreadable files, and NPY
+//! arrays whose dtype, order, shape or size do not fit.
+
+mod csv_file;
+mod error;
+mod npy_dir;
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::string::String;
+use std::vec::Vec;
+
+pub use error::{DataError, DataErrorKind, Location};
+
+/// The label of a row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Label {
+    /// A true object of the class with this index.
+    Class(usize),
+    /// No object (a false positive of the detector).
+    Background,
+    /// Unknown: no label column, or an empty label.
+    Missing,
+}
+
+/// One row of a data source, borrowed for the duration of the callback.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Row<'a> {
+    /// 0-based index of the data row (the header is not counted).
+    pub index: u64,
+    /// The 1-based line the record starts on, for CSV files (the header is line 1).
+    pub line: Option<u64>,
+    /// The `id` field, when the CSV file has that column.
+    pub id: Option<&'a str>,
+    /// The label.
+    pub label: Label,
+    /// The objectness, in `[0, 1]` (1.0 when the source has none).
+    pub objectness: f64,
+    /// The K class logits, all finite, in class order.
+    pub logits: &'a [f64],
+}
+
+impl Row<'_> {
+    /// Where the row is, for error messages: its CSV line or NPY row index.
+    pub fn location(&self) -> Location {
+        match self.line {
+            Some(l) => Location::Line(l),
+            None => Location::Row(self.index),
+        }
+    }
+}
+
+/// A checked data file (CSV) or directory (NPY), ready to be streamed.
+#[derive(Debug, Clone)]
+pub struct DataSource {
+    path: PathBuf,
+    classes: Vec<String>,
+    format: Format,
+}
+
+#[derive(Debug, Clone)]
+enum Format {
+    Csv(csv_file::Schema),
+    Npy(npy_dir::Schema),
+}
+
+impl DataSource {
+    /// Opens `path`: an NPY directory if it is a directory, a CSV file otherwise. Only
+    /// headers are read.
+    ///
+    /// # Errors
+    ///
+    /// A [`DataError`] when the path does not exist or cannot be read, or when a header
+    /// breaks a rule of DESIGN §2 (see the [module docs](self)).
+    pub fn open(path: &Path) -> Result<Self, DataError> {
+        let (classes, format) = if path.is_dir() {
+            let (classes, schema) = npy_dir::Schema::open(path)?;
+            (classes, Format::Npy(schema))
+        } else if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
+        {
+            return Err(DataError::new(path, DataErrorKind::NpyFileNotDirectory));
+        } else {
+            let (classes, schema) = csv_file::Schema::open(path)?;
+            (classes, Format::Csv(schema))
+        };
+        Ok(Self {
+            path: path.to_path_buf(),
+            classes,
+            format,
+        })
+    }
+
+    /// The path given to [`DataSource::open`].
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The class names, in column order (K of them, K >= 2).
+    pub fn classes(&self) -> &[String] {
+        &self.classes
+    }
+
+    /// `true` when the rows carry labels (a CSV `label` column or `labels.npy`).
+    pub fn has_labels(&self) -> bool {
+        match &self.format {
+            Format::Csv(s) => s.has_labels(),
+            Format::Npy(s) => s.has_labels(),
+        }
+    }
+
+    /// `true` when the rows carry an `id` (CSV files with an `id` column).
+    pub fn has_ids(&self) -> bool {
+        match &self.format {
+            Format::Csv(s) => s.has_ids(),
+            Format::Npy(_) => false,
+        }
+    }
+
+    /// `true` when the rows carry an objectness (otherwise every row has 1.0).
+    pub fn has_objectness(&self) -> bool {
+        match &self.format {
+            Format::Csv(s) => s.has_objectness(),
+            Format::Npy(s) => s.has_objectness(),
+        }
+    }
+
+    /// The number of rows when it is known without reading them (NPY directories).
+    pub fn row_count_hint(&self) -> Option<u64> {
+        match &self.format {
+            Format::Csv(_) => None,
+            Format::Npy(s) => Some(s.rows()),
+        }
+    }
+
+    /// Streams every row, in order, through `f`; stops at the first error, of the data
+    /// or of `f`.
+    ///
+    /// Memory use does not depend on the number of rows. Each call reads the input
+    /// again from the start.
+    ///
+    /// # Errors
+    ///
+    /// The first [`DataError`] of a row (converted into `E`), or the first error `f`
+    /// returns.
+    pub fn for_each_row<E, F>(&self, f: F) -> Result<(), E>
+    where
+        E: From<DataError>,
+        F: FnMut(Row<'_>) -> Result<(), E>,
+    {
+        match &self.format {
+            Format::Csv(s) => s.for_each_row(&self.path, &self.classes, f),
+            Format::Npy(s) => s.for_each_row(&self.classes, f),
+        }
+    }
+}
+
+/// Checks a list of class names (DESIGN §2 and the table's name rules); `error` builds
+/// the error for name `i` (`usize::MAX` when no single name is at fault). Returns the
+/// name-to-index map.
+fn check_class_names(
+    names: &[String],
+    error: impl Fn(usize, DataErrorKind) -> DataError,
+) -> Result<HashMap<String, usize>, DataError> {
+    if names.len() < 2 || names.len() > usize::from(u16::MAX) {
+        return Err(error(
+            usize::MAX,
+            DataErrorKind::ClassCount { found: names.len() },
+        ));
+    }
+    let mut index = HashMap::with_capacity(names.len());
+    for (i, name) in names.iter().enumerate() {
+        if name.is_empty() {
+            return Err(error(i, DataErrorKind::EmptyColumnName { index: i + 1 }));
+        }
+        if name == "background" {
+            return Err(error(i, DataErrorKind::ReservedClassName));
+        }
+        if name.len() > crate::NAME_MAX {
+            return Err(error(
+                i,
+                DataErrorKind::ClassNameTooLong { len: name.len() },
+            ));
+        }
+        if index.insert(name.clone(), i).is_some() {
+            return Err(error(i, DataErrorKind::DuplicateColumn));
+        }
+    }
+    Ok(index)
+}

@@ -1,0 +1,649 @@
+//! Fitting a table from labelled training logits (DESIGN §1.1; paper §III-B).
+//!
+//! For each class `c` the fit takes `v_c`, the logit of column `c` of the rows labelled
+//! `c` (rows labelled `background` or unlabelled are skipped), and computes:
+//!
+//! * the **likelihood** of each head: a histogram of `v_c` with `B` equal bins,
+//!   normalised to frequencies `count_k / |v_c|`; the edges are placed by
+//!   [`EdgeMode::Linspace`] (`[min, max]`) or [`EdgeMode::Matlab`] (MATLAB's bin
+//!   picker, below); see [`ClassMoments::range`];
+//! * the **prior**: the mean and the sample variance (`ddof = 1`) of `v_c`, the
+//!   variance floored to [`VARIANCE_FLOOR`](crate::VARIANCE_FLOOR).
+//!
+//! The moments are accumulated in `f64`. The histogram counts use the values rounded
+//! to `f32` and the table's own `f32` edges and bin rule
+//! ([`Histogram::bin`](crate::Histogram::bin)), so each training value is counted in
+//! exactly the bin the device looks it up in.
+//!
+//! # Two ways to fit
+//!
+//! * [`fit`] streams the data twice (pass 1: [`class_moments`]; pass 2: the counts).
+//!   Memory is `O(K B)`, whatever the number of rows.
+//! * [`TrainingSet::read`] streams the data once and keeps `v_c` of every class in
+//!   memory (4 bytes per labelled row, sorted). Histograms for any bin count are then
+//!   computed without reading the data again, in `O(K B log n)`
+//!   ([`TrainingSet::histograms`]), and [`build_table`] assembles tables for any
+//!   lambdas: this is what hyper-parameter tuning needs. Both give identical tables.
+//!
+//! # MATLAB's bin picker
+//!
+//! The `matlab` edge mode reproduces the edges of MATLAB's `histogram(x, nbins)`, with
+//! which the paper's authors built their tables. With `xmin`, `xmax` the extremes of
+//! `v_c`, `r = xmax - xmin` and `eps(s)` the spacing of doubles at
+//! `s = max(|xmin|, |xmax|)`:
+//!
+//! 1. Nearly constant data (`r <= sqrt(eps(s))`): the edges are half-integers around
+//!    the data with at least a quarter unit of margin, `floor(2 (xmin - u/4)) / 2` and
+//!    `ceil(2 (xmax + u/4)) / 2` with `u = max(1, ceil(B eps(s)))`.
+//! 2. Otherwise `raw = r / B` is truncated to its leading decimal digit, `w0`, and the
+//!    first edge is the multiple of `w0` at or below `xmin`, `left`.
+//! 3. For `B > 1` the bin width is the smallest multiple of
+//!    `q = 10^floor(log10(hi - lo))` that is at least `lo`, where `lo = (xmax - left)/B`
+//!    and `hi = (xmax - left)/(B - 1)` bound the widths that keep `xmax` in the last
+//!    bin; for `B = 1` it is `w0`.
+//! 4. The last edge is `max(left + B width, xmax)`.
+//!
+//! Example (MathWorks' `histcounts` documentation): `[2 3 5 7 11 13 17 19 23 29]` with
+//! 6 bins gives the edges `0, 4.9, 9.8, ..., 29.4`. MATLAB then counts doubles against
+//! double edges; the table counts `f32` values against `f32` edges, which can differ
+//! only for a value within an `f32` rounding of an edge.
+
+mod binpicker;
+mod stats;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::string::{String, ToString};
+use std::vec::Vec;
+
+use crate::host::dataset::{DataError, DataSource, Label, Row};
+use crate::host::DynTable;
+use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
+
+pub use stats::{ClassHistogram, ClassMoments};
+
+use stats::BinCounter;
+
+/// Largest bin count of a head (the table stores bin counts as `u16`).
+pub const MAX_BINS: usize = u16::MAX as usize;
+
+/// The hyper-parameters of a fit.
+///
+/// # Parameters
+///
+/// | Name | Default | Purpose | Range |
+/// |---|---|---|---|
+/// | `bins_ml` | 22 | bins of the ML head's histograms | `1..=65535` |
+/// | `lambda_ml` | 0.0055 | additive smoothing of the ML head | `(0, 1e6]` |
+/// | `bins_map` | 17 | bins of the MAP head's histograms | `1..=65535` |
+/// | `lambda_map` | 0.00012 | additive smoothing of the MAP head | `(0, 1e6]` |
+/// | `edges` | `Linspace` | how bin edges are placed | `Linspace`, `Matlab` |
+/// | `upper_tail` | `Zero` | likelihood above the last edge (recorded in the table) | `Zero`, `Clamp` |
+///
+/// The defaults are the authors' detection settings (DESIGN §1.1). Very large bin
+/// counts may make the `f32` frequencies miss the table's sum tolerance, and are
+/// refused by [`DynTable::new`]; they are far beyond any useful histogram.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitParams {
+    /// Bins of the ML histograms.
+    pub bins_ml: usize,
+    /// Smoothing lambda of the ML head.
+    pub lambda_ml: f32,
+    /// Bins of the MAP histograms.
+    pub bins_map: usize,
+    /// Smoothing lambda of the MAP head.
+    pub lambda_map: f32,
+    /// Edge placement.
+    pub edges: EdgeMode,
+    /// Upper-tail policy, recorded in the table's settings.
+    pub upper_tail: UpperTail,
+}
+
+impl Default for FitParams {
+    fn default() -> Self {
+        Self {
+            bins_ml: 22,
+            lambda_ml: 0.0055,
+            bins_map: 17,
+            lambda_map: 0.00012,
+            edges: EdgeMode::Linspace,
+            upper_tail: UpperTail::Zero,
+        }
+    }
+}
+
+impl FitParams {
+    /// Checks every parameter against its range.
+    ///
+    /// # Errors
+    ///
+    /// [`FitError::Param`] naming the first parameter out of range.
+    pub fn validate(&self) -> Result<(), FitError> {
+        let bins = |name, v: usize| {
+            if (1..=MAX_BINS).contains(&v) {
+                Ok(())
+            } else {
+                Err(FitError::Param {
+                    name,
+                    value: v.to_string(),
+                    expected: "an integer from 1 to 65535",
+                })
+            }
+        };
+        let lambda = |name, v: f32| {
+            if v > 0.0 && v <= MAX_LAMBDA {
+                Ok(())
+            } else {
+                Err(FitError::Param {
+                    name,
+                    value: v.to_string(),
+                    expected: "a number in (0, 1e6]",
+                })
+            }
+        };
+        bins("bins_ml", self.bins_ml)?;
+        bins("bins_map", self.bins_map)?;
+        lambda("lambda_ml", self.lambda_ml)?;
+        lambda("lambda_map", self.lambda_map)
+    }
+
+    /// The table settings these parameters give.
+    pub fn settings(&self) -> Settings {
+        Settings {
+            lambda_ml: self.lambda_ml,
+            lambda_map: self.lambda_map,
+            edge_mode: self.edges,
+            upper_tail: self.upper_tail,
+        }
+    }
+}
+
+/// Why a table could not be fitted.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum FitError {
+    /// The training data could not be read.
+    Data(DataError),
+    /// A hyper-parameter is out of range.
+    Param {
+        /// Parameter name (as in [`FitParams`]).
+        name: &'static str,
+        /// The value given.
+        value: String,
+        /// The accepted range.
+        expected: &'static str,
+    },
+    /// The training data has no labels.
+    NoLabels {
+        /// The training input.
+        path: PathBuf,
+    },
+    /// Some classes have no training rows.
+    EmptyClasses {
+        /// The training input.
+        path: PathBuf,
+        /// The classes without rows.
+        classes: Vec<String>,
+    },
+    /// A class's histogram range cannot be split into the requested bins with distinct
+    /// `f32` edges (the values span too little for their magnitude).
+    Edges {
+        /// The class.
+        class: String,
+        /// Requested bins.
+        bins: usize,
+        /// First edge.
+        lo: f32,
+        /// Last edge.
+        hi: f32,
+    },
+    /// A class's logits, or their variance, do not fit in `f32`.
+    OutOfF32 {
+        /// The class.
+        class: String,
+    },
+    /// The input changed between the two passes of [`fit`].
+    Changed {
+        /// The training input.
+        path: PathBuf,
+    },
+    /// The fitted statistics break a table invariant.
+    Table(TableError),
+}
+
+impl FitError {
+    /// `true` when the input or the parameters are at fault (exit code 2), `false` for
+    /// an I/O or internal failure (exit code 1).
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            Self::Data(e) => e.is_bad_input(),
+            Self::Changed { .. } | Self::Table(_) => false,
+            Self::Param { .. }
+            | Self::NoLabels { .. }
+            | Self::EmptyClasses { .. }
+            | Self::Edges { .. }
+            | Self::OutOfF32 { .. } => true,
+        }
+    }
+}
+
+impl From<DataError> for FitError {
+    fn from(e: DataError) -> Self {
+        Self::Data(e)
+    }
+}
+
+impl fmt::Display for FitError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Data(e) => write!(f, "{e}"),
+            Self::Param {
+                name,
+                value,
+                expected,
+            } => write!(f, "{name} = {value} is out of range: expected {expected}"),
+            Self::NoLabels { path } => write!(
+                f,
+                "{}: the data has no labels (a `label` column or labels.npy); \
+                 fitting needs labelled rows",
+                path.display()
+            ),
+            Self::EmptyClasses { path, classes } => {
+                write!(f, "{}: ", path.display())?;
+                let quoted: Vec<String> = classes.iter().map(|c| std::format!("{c:?}")).collect();
+                match quoted.as_slice() {
+                    [one] => write!(f, "class {one} has no training rows")?,
+                    many => write!(f, "classes {} have no training rows", many.join(", "))?,
+                }
+                f.write_str(" (rows labelled with the class); every class needs at least one")
+            }
+            Self::Edges {
+                class,
+                bins,
+                lo,
+                hi,
+            } => write!(
+                f,
+                "class {class:?}: the range [{lo}, {hi}] cannot be split into {bins} bins \
+                 with distinct f32 edges; use fewer bins"
+            ),
+            Self::OutOfF32 { class } => write!(
+                f,
+                "class {class:?}: the training logits or their variance exceed the f32 \
+                 range of a table"
+            ),
+            Self::Changed { path } => write!(
+                f,
+                "{}: the input changed while it was being read",
+                path.display()
+            ),
+            Self::Table(e) => write!(f, "the fitted table is invalid: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for FitError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            Self::Data(e) => Some(e),
+            Self::Table(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// The value `v_c` a row contributes, with its class: `x_c` of a row labelled `c`.
+fn class_value(row: &Row<'_>) -> Option<(usize, f64)> {
+    match row.label {
+        Label::Class(c) => row.logits.get(c).map(|&x| (c, x)),
+        Label::Background | Label::Missing => None,
+    }
+}
+
+/// Refuses unlabelled sources.
+fn require_labels(source: &DataSource) -> Result<(), FitError> {
+    if source.has_labels() {
+        Ok(())
+    } else {
+        Err(FitError::NoLabels {
+            path: source.path().to_path_buf(),
+        })
+    }
+}
+
+/// Refuses classes without rows.
+fn require_rows(path: &Path, moments: &[ClassMoments]) -> Result<(), FitError> {
+    let empty: Vec<String> = moments
+        .iter()
+        .filter(|m| m.count() == 0)
+        .map(|m| m.name().to_string())
+        .collect();
+    if empty.is_empty() {
+        Ok(())
+    } else {
+        Err(FitError::EmptyClasses {
+            path: path.to_path_buf(),
+            classes: empty,
+        })
+    }
+}
+
+fn empty_moments(source: &DataSource) -> Vec<ClassMoments> {
+    source
+        .classes()
+        .iter()
+        .map(|c| ClassMoments::new(c.as_str()))
+        .collect()
+}
+
+/// Pass 1 of [`fit`]: the moments of every class, in one streaming pass.
+///
+/// # Errors
+///
+/// [`FitError::Data`] for unreadable data, [`FitError::NoLabels`] for unlabelled data,
+/// [`FitError::EmptyClasses`] when a class has no training rows.
+pub fn class_moments(source: &DataSource) -> Result<Vec<ClassMoments>, FitError> {
+    require_labels(source)?;
+    let mut moments = empty_moments(source);
+    source.for_each_row(|row| {
+        if let Some((c, x)) = class_value(&row) {
+            if let Some(m) = moments.get_mut(c) {
+                m.push(x);
+            }
+        }
+        Ok::<(), FitError>(())
+    })?;
+    require_rows(source.path(), &moments)?;
+    Ok(moments)
+}
+
+/// A counter over the histogram range of class `m`.
+fn counter_for(m: &ClassMoments, bins: usize, edges: EdgeMode) -> Result<BinCounter, FitError> {
+    if !((m.min() as f32).is_finite() && (m.max() as f32).is_finite()) {
+        return Err(FitError::OutOfF32 {
+            class: m.name().to_string(),
+        });
+    }
+    let (lo, hi) = m.range(bins, edges);
+    BinCounter::new(lo, hi, bins).ok_or_else(|| FitError::Edges {
+        class: m.name().to_string(),
+        bins,
+        lo,
+        hi,
+    })
+}
+
+fn counters(
+    moments: &[ClassMoments],
+    bins: usize,
+    edges: EdgeMode,
+) -> Result<Vec<BinCounter>, FitError> {
+    moments
+        .iter()
+        .map(|m| counter_for(m, bins, edges))
+        .collect()
+}
+
+/// Fits a table from `source` in two streaming passes (memory independent of the row
+/// count).
+///
+/// # Errors
+///
+/// [`FitError::Param`] for parameters out of range; [`FitError::Data`],
+/// [`FitError::NoLabels`] and [`FitError::EmptyClasses`] as [`class_moments`];
+/// [`FitError::Edges`] or [`FitError::OutOfF32`] for classes whose statistics a table
+/// cannot hold; [`FitError::Changed`] if the input changes between the passes.
+pub fn fit(source: &DataSource, params: &FitParams) -> Result<DynTable, FitError> {
+    params.validate()?;
+    let moments = class_moments(source)?;
+    let mut ml = counters(&moments, params.bins_ml, params.edges)?;
+    let mut map = counters(&moments, params.bins_map, params.edges)?;
+    let mut outside = false;
+    source.for_each_row(|row| {
+        if let Some((c, x)) = class_value(&row) {
+            if let (Some(a), Some(b)) = (ml.get_mut(c), map.get_mut(c)) {
+                let x = x as f32;
+                let (in_a, in_b) = (a.add(x), b.add(x));
+                outside |= !(in_a && in_b);
+            }
+        }
+        Ok::<(), FitError>(())
+    })?;
+    let ml: Vec<ClassHistogram> = ml.into_iter().map(BinCounter::finish).collect();
+    let map: Vec<ClassHistogram> = map.into_iter().map(BinCounter::finish).collect();
+    let same_rows = moments
+        .iter()
+        .zip(&ml)
+        .zip(&map)
+        .all(|((m, a), b)| a.total() == m.count() && b.total() == m.count());
+    if outside || !same_rows {
+        return Err(FitError::Changed {
+            path: source.path().to_path_buf(),
+        });
+    }
+    build_table(&moments, &ml, &map, params.settings())
+}
+
+/// Assembles a table from per-class moments and the histograms of both heads (one of
+/// each per class, in class order); provenance rows are the class counts.
+///
+/// # Errors
+///
+/// [`FitError::OutOfF32`] when a mean or variance does not fit in `f32`;
+/// [`FitError::Table`] when the parts break another table invariant (mismatched bin
+/// counts or class counts, invalid lambdas, ...).
+pub fn build_table(
+    moments: &[ClassMoments],
+    ml: &[ClassHistogram],
+    map: &[ClassHistogram],
+    settings: Settings,
+) -> Result<DynTable, FitError> {
+    if ml.len() != moments.len() || map.len() != moments.len() {
+        return Err(FitError::Table(TableError::ClassCount));
+    }
+    let mut specs = Vec::with_capacity(moments.len());
+    for ((m, a), b) in moments.iter().zip(ml).zip(map) {
+        let (mean, variance) = (m.mean() as f32, m.prior_variance() as f32);
+        if !(mean.is_finite() && variance.is_finite()) {
+            return Err(FitError::OutOfF32 {
+                class: m.name().to_string(),
+            });
+        }
+        specs.push(ClassSpec {
+            name: m.name(),
+            rows: m.count(),
+            mean,
+            variance,
+            ml_range: (a.lo(), a.hi()),
+            ml_freqs: a.frequencies(),
+            map_range: (b.lo(), b.hi()),
+            map_freqs: b.frequencies(),
+        });
+    }
+    DynTable::new(settings, specs).map_err(FitError::Table)
+}
+
+/// The training values of every class, held in memory, for fitting many tables from
+/// one read of the data (hyper-parameter tuning).
+///
+/// Memory: 4 bytes per labelled row (the values `v_c` as `f32`, sorted), plus the
+/// moments. Histograms for a bin count cost `O(K B log n)` and never read the data.
+#[derive(Debug, Clone)]
+pub struct TrainingSet {
+    path: PathBuf,
+    moments: Vec<ClassMoments>,
+    /// `v_c` of each class as `f32`, sorted ascending.
+    values: Vec<Vec<f32>>,
+}
+
+impl TrainingSet {
+    /// Reads `source` once: moments and values of every class.
+    ///
+    /// # Errors
+    ///
+    /// As [`class_moments`].
+    pub fn read(source: &DataSource) -> Result<Self, FitError> {
+        require_labels(source)?;
+        let mut moments = empty_moments(source);
+        let mut values: Vec<Vec<f32>> = std::vec![Vec::new(); moments.len()];
+        source.for_each_row(|row| {
+            if let Some((c, x)) = class_value(&row) {
+                if let (Some(m), Some(v)) = (moments.get_mut(c), values.get_mut(c)) {
+                    m.push(x);
+                    v.push(x as f32);
+                }
+            }
+            Ok::<(), FitError>(())
+        })?;
+        require_rows(source.path(), &moments)?;
+        for v in &mut values {
+            v.sort_unstable_by(f32::total_cmp);
+        }
+        Ok(Self {
+            path: source.path().to_path_buf(),
+            moments,
+            values,
+        })
+    }
+
+    /// The training input this set was read from.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The moments of every class, in class order.
+    pub fn moments(&self) -> &[ClassMoments] {
+        &self.moments
+    }
+
+    /// The values `v_c` of class `class` as `f32`, sorted ascending.
+    pub fn values(&self, class: usize) -> Option<&[f32]> {
+        self.values.get(class).map(Vec::as_slice)
+    }
+
+    /// The histogram of every class with `bins` bins placed by `edges`.
+    ///
+    /// # Errors
+    ///
+    /// [`FitError::Param`] for a bin count out of `1..=65535`; [`FitError::Edges`] or
+    /// [`FitError::OutOfF32`] for a class whose range a table cannot hold.
+    pub fn histograms(
+        &self,
+        bins: usize,
+        edges: EdgeMode,
+    ) -> Result<Vec<ClassHistogram>, FitError> {
+        if !(1..=MAX_BINS).contains(&bins) {
+            return Err(FitError::Param {
+                name: "bins",
+                value: bins.to_string(),
+                expected: "an integer from 1 to 65535",
+            });
+        }
+        self.moments
+            .iter()
+            .zip(&self.values)
+            .map(|(m, v)| {
+                let mut counter = counter_for(m, bins, edges)?;
+                if counter.add_sorted(v) {
+                    Ok(counter.finish())
+                } else {
+                    // Unreachable: the range covers every value by construction.
+                    Err(FitError::Edges {
+                        class: m.name().to_string(),
+                        bins,
+                        lo: m.min() as f32,
+                        hi: m.max() as f32,
+                    })
+                }
+            })
+            .collect()
+    }
+
+    /// Fits a table with `params`; the same table as [`fit`] on the same data.
+    ///
+    /// # Errors
+    ///
+    /// As [`fit`], except for data errors (the data was read by
+    /// [`TrainingSet::read`]).
+    pub fn fit(&self, params: &FitParams) -> Result<DynTable, FitError> {
+        params.validate()?;
+        let ml = self.histograms(params.bins_ml, params.edges)?;
+        let map = self.histograms(params.bins_map, params.edges)?;
+        build_table(&self.moments, &ml, &map, params.settings())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_the_authors_detection_settings() {
+        let p = FitParams::default();
+        assert_eq!((p.bins_ml, p.bins_map), (22, 17));
+        assert_eq!((p.lambda_ml, p.lambda_map), (0.0055, 0.00012));
+        assert_eq!(p.edges, EdgeMode::Linspace);
+        assert_eq!(p.upper_tail, UpperTail::Zero);
+        assert_eq!(p.validate(), Ok(()));
+    }
+
+    #[test]
+    fn parameters_out_of_range_are_refused() {
+        let bad = [
+            FitParams {
+                bins_ml: 0,
+                ..FitParams::default()
+            },
+            FitParams {
+                bins_map: 65536,
+                ..FitParams::default()
+            },
+            FitParams {
+                lambda_ml: 0.0,
+                ..FitParams::default()
+            },
+            FitParams {
+                lambda_map: f32::NAN,
+                ..FitParams::default()
+            },
+            FitParams {
+                lambda_map: 2e6,
+                ..FitParams::default()
+            },
+        ];
+        let names = [
+            "bins_ml",
+            "bins_map",
+            "lambda_ml",
+            "lambda_map",
+            "lambda_map",
+        ];
+        for (p, want) in bad.iter().zip(names) {
+            match p.validate() {
+                Err(FitError::Param { name, .. }) => assert_eq!(name, want),
+                other => panic!("{p:?}: {other:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn empty_classes_message_names_every_class_and_the_file() {
+        let e = FitError::EmptyClasses {
+            path: "t.csv".into(),
+            classes: std::vec!["cyclist".into()],
+        };
+        assert_eq!(
+            e.to_string(),
+            "t.csv: class \"cyclist\" has no training rows (rows labelled with the class); \
+             every class needs at least one"
+        );
+        let e = FitError::EmptyClasses {
+            path: "t.csv".into(),
+            classes: std::vec!["a".into(), "b".into()],
+        };
+        assert!(e
+            .to_string()
+            .contains("classes \"a\", \"b\" have no training rows"));
+        assert!(e.is_bad_input());
+    }
+}

@@ -1,0 +1,807 @@
+//! `mlmap::host::dataset`: CSV and NPY inputs, valid and malformed.
+
+use std::path::{Path, PathBuf};
+
+use mlmap::host::dataset::{DataError, DataErrorKind, DataSource, Label, Location, Row};
+use npyz::WriterBuilder;
+
+/// A row copied out of the callback.
+#[derive(Debug, Clone, PartialEq)]
+struct Owned {
+    index: u64,
+    line: Option<u64>,
+    id: Option<String>,
+    label: Label,
+    objectness: f64,
+    logits: Vec<f64>,
+}
+
+impl From<Row<'_>> for Owned {
+    fn from(r: Row<'_>) -> Self {
+        Self {
+            index: r.index,
+            line: r.line,
+            id: r.id.map(str::to_string),
+            label: r.label,
+            objectness: r.objectness,
+            logits: r.logits.to_vec(),
+        }
+    }
+}
+
+fn read_all(path: &Path) -> Result<(DataSource, Vec<Owned>), DataError> {
+    let src = DataSource::open(path)?;
+    let mut rows = Vec::new();
+    src.for_each_row(|r| {
+        rows.push(Owned::from(r));
+        Ok::<(), DataError>(())
+    })?;
+    Ok((src, rows))
+}
+
+/// Writes `bytes` to `name` in a fresh temporary directory.
+fn file(name: &str, bytes: &[u8]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    (dir, path)
+}
+
+fn csv_error(text: &str) -> DataError {
+    let (_dir, path) = file("data.csv", text.as_bytes());
+    let err = read_all(&path).expect_err(text);
+    assert_eq!(err.path(), path, "{err}");
+    assert!(err.is_bad_input(), "{err}");
+    err
+}
+
+fn row(index: u64, line: u64, id: Option<&str>, label: Label, os: f64, logits: &[f64]) -> Owned {
+    Owned {
+        index,
+        line: Some(line),
+        id: id.map(str::to_string),
+        label,
+        objectness: os,
+        logits: logits.to_vec(),
+    }
+}
+
+#[test]
+fn csv_with_id_and_objectness() {
+    let text = "id,label,objectness,car,cyclist,pedestrian\n\
+                17,car,0.93,4.1,-2.3,-1.7\n\
+                18,background,0.55,1.2,0.3,-0.4\n\
+                a-19,,1,0,0,0\n\
+                20,pedestrian,0,1e-3,-2E2,3\n";
+    let (_dir, path) = file("d.csv", text.as_bytes());
+    let (src, rows) = read_all(&path).unwrap();
+    assert_eq!(src.classes(), ["car", "cyclist", "pedestrian"]);
+    assert!(src.has_labels() && src.has_ids() && src.has_objectness());
+    assert_eq!(src.path(), path);
+    assert_eq!(src.row_count_hint(), None);
+    let want = [
+        row(0, 2, Some("17"), Label::Class(0), 0.93, &[4.1, -2.3, -1.7]),
+        row(1, 3, Some("18"), Label::Background, 0.55, &[1.2, 0.3, -0.4]),
+        row(2, 4, Some("a-19"), Label::Missing, 1.0, &[0.0, 0.0, 0.0]),
+        row(
+            3,
+            5,
+            Some("20"),
+            Label::Class(2),
+            0.0,
+            &[0.001, -200.0, 3.0],
+        ),
+    ];
+    assert_eq!(rows, want);
+}
+
+#[test]
+fn csv_without_id_objectness_or_labels() {
+    // Columns in any order; objectness defaults to 1; whitespace is trimmed; CRLF.
+    let text = "b , label, a\r\n 1.5 , a ,-1\r\n\r\n2,b,0.25\r\n";
+    let (_dir, path) = file("d.csv", text.as_bytes());
+    let (src, rows) = read_all(&path).unwrap();
+    assert_eq!(src.classes(), ["b", "a"]);
+    assert!(src.has_labels() && !src.has_ids() && !src.has_objectness());
+    assert_eq!(
+        rows,
+        [
+            row(0, 2, None, Label::Class(1), 1.0, &[1.5, -1.0]),
+            row(1, 4, None, Label::Class(0), 1.0, &[2.0, 0.25]),
+        ]
+    );
+    // A bad field after a CRLF blank line reports its true line; a quoted last field
+    // before CRLF is read without the CR.
+    let (_dir, path) = file("d.csv", b"label,a,b\r\n\r\na,1,\"2\"\r\na,x,2\r\n");
+    let err = read_all(&path).unwrap_err();
+    assert_eq!(err.line(), Some(4), "{err}");
+    assert_eq!(err.column(), Some("a"), "{err}");
+
+    let (_dir, path) = file("d.csv", b"x,y\n1,2\n");
+    let (src, rows) = read_all(&path).unwrap();
+    assert!(!src.has_labels());
+    assert_eq!(rows, [row(0, 2, None, Label::Missing, 1.0, &[1.0, 2.0])]);
+}
+
+#[test]
+fn csv_header_only_has_no_rows_and_a_bom_is_ignored() {
+    let (_dir, path) = file("d.csv", "\u{feff}label,a,b\n".as_bytes());
+    let (src, rows) = read_all(&path).unwrap();
+    assert!(src.has_labels());
+    assert_eq!(src.classes(), ["a", "b"]);
+    assert!(rows.is_empty());
+}
+
+#[test]
+fn csv_rows_can_be_read_twice_and_callbacks_stop_the_stream() {
+    let text = "label,a,b\na,1,2\nb,3,4\na,5,6\n";
+    let (_dir, path) = file("d.csv", text.as_bytes());
+    let (src, first) = read_all(&path).unwrap();
+    let mut second = Vec::new();
+    src.for_each_row(|r| {
+        second.push(Owned::from(r));
+        Ok::<(), DataError>(())
+    })
+    .unwrap();
+    assert_eq!(first, second);
+
+    #[derive(Debug, PartialEq)]
+    enum E {
+        Data,
+        Stop(u64),
+    }
+    impl From<DataError> for E {
+        fn from(_: DataError) -> Self {
+            E::Data
+        }
+    }
+    let mut seen = 0;
+    let r = src.for_each_row(|r| {
+        seen += 1;
+        if r.index == 1 {
+            Err(E::Stop(r.index))
+        } else {
+            Ok(())
+        }
+    });
+    assert_eq!(r, Err(E::Stop(1)));
+    assert_eq!(seen, 2);
+}
+
+#[test]
+fn csv_error_display_names_file_line_and_column() {
+    let text = "id,label,objectness,car,cyclist\n1,car,0.5,1.0,2.0\n2,car,0.5,1.0,abc\n";
+    let (_dir, path) = file("x.csv", text.as_bytes());
+    let err = read_all(&path).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "{}:3: column \"cyclist\": \"abc\" is not a number",
+            path.display()
+        )
+    );
+}
+
+#[test]
+fn every_malformed_csv_is_refused_with_its_position() {
+    let long = "n".repeat(32);
+    let long_header = format!("label,a,{long}\n");
+    // (input, kind, line, column)
+    let cases: Vec<(&str, DataErrorKind, Option<u64>, Option<&str>)> = vec![
+        (
+            "label,a,b\na,1,2\nb,1\n",
+            DataErrorKind::FieldCount {
+                expected: 3,
+                found: 2,
+            },
+            Some(3),
+            None,
+        ),
+        (
+            "label,a,b\na,1,2,3\n",
+            DataErrorKind::FieldCount {
+                expected: 3,
+                found: 4,
+            },
+            Some(2),
+            None,
+        ),
+        (
+            "label,a,b\na,1,2x\n",
+            DataErrorKind::NotANumber { text: "2x".into() },
+            Some(2),
+            Some("b"),
+        ),
+        (
+            "label,a,b\ntruck,1,2\n",
+            DataErrorKind::UnknownLabel {
+                text: "truck".into(),
+            },
+            Some(2),
+            Some("label"),
+        ),
+        (
+            "label,a,b\nBackground,1,2\n",
+            DataErrorKind::UnknownLabel {
+                text: "Background".into(),
+            },
+            Some(2),
+            Some("label"),
+        ),
+        (
+            "label,a,b\na,NaN,2\n",
+            DataErrorKind::NotFinite { text: "NaN".into() },
+            Some(2),
+            Some("a"),
+        ),
+        (
+            "label,a,b\na,1,-inf\n",
+            DataErrorKind::NotFinite {
+                text: "-inf".into(),
+            },
+            Some(2),
+            Some("b"),
+        ),
+        (
+            "label,a,b\na,1,1e400\n",
+            DataErrorKind::NotFinite {
+                text: "1e400".into(),
+            },
+            Some(2),
+            Some("b"),
+        ),
+        (
+            "label,a,b\na,,2\n",
+            DataErrorKind::MissingValue,
+            Some(2),
+            Some("a"),
+        ),
+        (
+            "label,objectness,a,b\na,nan,1,2\n",
+            DataErrorKind::ObjectnessRange { text: "nan".into() },
+            Some(2),
+            Some("objectness"),
+        ),
+        (
+            "label,objectness,a,b\na,1.5,1,2\n",
+            DataErrorKind::ObjectnessRange { text: "1.5".into() },
+            Some(2),
+            Some("objectness"),
+        ),
+        (
+            "label,objectness,a,b\na,-0.01,1,2\n",
+            DataErrorKind::ObjectnessRange {
+                text: "-0.01".into(),
+            },
+            Some(2),
+            Some("objectness"),
+        ),
+        (
+            "label,objectness,a,b\na,,1,2\n",
+            DataErrorKind::MissingValue,
+            Some(2),
+            Some("objectness"),
+        ),
+        (
+            "label,objectness,a,b\na,high,1,2\n",
+            DataErrorKind::NotANumber {
+                text: "high".into(),
+            },
+            Some(2),
+            Some("objectness"),
+        ),
+        (
+            "id,label,objectness\n",
+            DataErrorKind::ClassCount { found: 0 },
+            Some(1),
+            None,
+        ),
+        (
+            "label,car\ncar,1\n",
+            DataErrorKind::ClassCount { found: 1 },
+            Some(1),
+            None,
+        ),
+        (
+            "label,car,cyclist,car\n",
+            DataErrorKind::DuplicateColumn,
+            Some(1),
+            Some("car"),
+        ),
+        (
+            "label,a,b,label\n",
+            DataErrorKind::DuplicateColumn,
+            Some(1),
+            Some("label"),
+        ),
+        (
+            "label,car,background\n",
+            DataErrorKind::ReservedClassName,
+            Some(1),
+            Some("background"),
+        ),
+        (
+            &long_header,
+            DataErrorKind::ClassNameTooLong { len: 32 },
+            Some(1),
+            Some(long.as_str()),
+        ),
+        (
+            "label,a,,b\n",
+            DataErrorKind::EmptyColumnName { index: 3 },
+            Some(1),
+            None,
+        ),
+        // Blank lines, line breaks in quoted fields and a missing final line break do
+        // not shift line numbers: the line is where the record starts.
+        (
+            "label,a,b\na,1,2\n\n\na,1,zz\n",
+            DataErrorKind::NotANumber { text: "zz".into() },
+            Some(5),
+            Some("b"),
+        ),
+        (
+            "id,label,a,b\n\"x\ny\",a,1,2\n7,a,1,q",
+            DataErrorKind::NotANumber { text: "q".into() },
+            Some(4),
+            Some("b"),
+        ),
+        (
+            "id,label,a,b\n\"x\n\ny\n\",a,1,q\n",
+            DataErrorKind::NotANumber { text: "q".into() },
+            Some(2),
+            Some("b"),
+        ),
+        // Blank lines before the header do not shift its line number.
+        (
+            "\n\nlabel,a,a\n",
+            DataErrorKind::DuplicateColumn,
+            Some(3),
+            Some("a"),
+        ),
+        ("", DataErrorKind::Empty, None, None),
+        ("\n\n", DataErrorKind::Empty, None, None),
+    ];
+    for (text, kind, line, column) in cases {
+        let err = csv_error(text);
+        assert_eq!(err.kind(), &kind, "{text:?}: {err}");
+        assert_eq!(err.line(), line, "{text:?}: {err}");
+        assert_eq!(err.column(), column, "{text:?}: {err}");
+    }
+}
+
+#[test]
+fn a_31_byte_class_name_is_accepted() {
+    let name = "n".repeat(31);
+    let (_dir, path) = file("d.csv", format!("label,a,{name}\n{name},1,2\n").as_bytes());
+    let (src, rows) = read_all(&path).unwrap();
+    assert_eq!(src.classes()[1], name);
+    assert_eq!(rows[0].label, Label::Class(1));
+}
+
+#[test]
+fn invalid_utf8_is_refused_with_its_line() {
+    let (_dir, path) = file("d.csv", b"label,a,b\na,1,2\n\xff\xfe,1,2\n");
+    let err = read_all(&path).unwrap_err();
+    assert_eq!(err.kind(), &DataErrorKind::NotUtf8, "{err}");
+    assert_eq!(err.line(), Some(3), "{err}");
+}
+
+#[test]
+fn missing_inputs_are_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("nope.csv");
+    let err = DataSource::open(&missing).unwrap_err();
+    assert_eq!(err.kind(), &DataErrorKind::NotFound);
+    assert_eq!(err.path(), missing);
+    assert!(err.is_bad_input());
+    assert!(err.to_string().contains("no such file"), "{err}");
+
+    // An empty directory is an NPY directory without logits.npy.
+    let err = DataSource::open(dir.path()).unwrap_err();
+    assert_eq!(err.kind(), &DataErrorKind::NotFound);
+    assert_eq!(err.path(), dir.path().join("logits.npy"));
+
+    // An array that is a directory.
+    let d2 = tempfile::tempdir().unwrap();
+    std::fs::create_dir(d2.path().join("logits.npy")).unwrap();
+    let err = DataSource::open(d2.path()).unwrap_err();
+    assert!(
+        matches!(err.kind(), DataErrorKind::Unreadable { .. }),
+        "{err}"
+    );
+    assert!(err.is_bad_input());
+
+    let (_d, npy) = file("logits.npy", b"\x93NUMPY");
+    let err = DataSource::open(&npy).unwrap_err();
+    assert_eq!(err.kind(), &DataErrorKind::NpyFileNotDirectory);
+}
+
+// ---- NPY ----
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+fn npy_row(index: u64, label: Label, os: f64, logits: [f32; 3]) -> Owned {
+    Owned {
+        index,
+        line: None,
+        id: None,
+        label,
+        objectness: os,
+        logits: logits.iter().map(|&x| f64::from(x)).collect(),
+    }
+}
+
+#[test]
+fn numpy_written_directory_f32_logits_i16_labels() {
+    // tests/fixtures/npy_small, written by tools/make_npy_fixtures.py.
+    let (src, rows) = read_all(&fixture("npy_small")).unwrap();
+    assert_eq!(src.classes(), ["car", "cyclist", "pedestrian"]);
+    assert!(src.has_labels() && src.has_objectness() && !src.has_ids());
+    assert_eq!(src.row_count_hint(), Some(5));
+    let want = [
+        npy_row(0, Label::Class(0), 0.93, [4.1, -2.3, -1.7]),
+        npy_row(1, Label::Background, 0.55, [1.2, 0.3, -0.4]),
+        npy_row(2, Label::Class(1), 1.0, [-1.0, 2.5, 0.5]),
+        npy_row(3, Label::Class(2), 0.0, [0.25, -0.5, 3.75]),
+        npy_row(4, Label::Class(0), 0.5, [2.0, 2.0, 2.0]),
+    ];
+    assert_eq!(rows, want);
+}
+
+#[test]
+fn numpy_written_directory_big_endian_f64_u8_labels_default_names() {
+    let (src, rows) = read_all(&fixture("npy_bigendian")).unwrap();
+    assert_eq!(src.classes(), ["class0", "class1", "class2"]);
+    assert!(src.has_labels() && !src.has_objectness());
+    let labels: Vec<Label> = rows.iter().map(|r| r.label).collect();
+    assert_eq!(
+        labels,
+        [0, 1, 2, 1, 0].map(Label::Class),
+        "labels of npy_bigendian"
+    );
+    assert_eq!(rows[0].logits, [4.1, -2.3, -1.7]);
+    assert!(rows.iter().all(|r| r.objectness == 1.0));
+}
+
+#[test]
+fn fortran_order_is_refused() {
+    let err = DataSource::open(&fixture("npy_fortran")).unwrap_err();
+    assert_eq!(err.kind(), &DataErrorKind::NpyFortranOrder);
+    assert!(err.path().ends_with("logits.npy"));
+    assert!(err.is_bad_input());
+}
+
+fn write_npy<T>(path: &Path, shape: &[u64], data: &[T])
+where
+    T: npyz::AutoSerialize + Clone,
+{
+    let mut out = std::fs::File::create(path).unwrap();
+    let mut w = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(shape)
+        .writer(&mut out)
+        .begin_nd()
+        .unwrap();
+    w.extend(data.iter().cloned()).unwrap();
+    w.finish().unwrap();
+}
+
+/// A valid 4 x 2 directory: logits f64, labels i64 [0, 1, -1, 1], objectness f32.
+fn npy_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_npy(
+        &d.join("logits.npy"),
+        &[4, 2],
+        &[1.0f64, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0],
+    );
+    write_npy(&d.join("labels.npy"), &[4], &[0i64, 1, -1, 1]);
+    write_npy(&d.join("objectness.npy"), &[4], &[0.5f32, 1.0, 0.0, 0.25]);
+    std::fs::write(d.join("classes.txt"), "car\ncyclist\n\n").unwrap();
+    dir
+}
+
+#[test]
+fn npyz_written_directory() {
+    let dir = npy_dir();
+    let (src, rows) = read_all(dir.path()).unwrap();
+    assert_eq!(src.classes(), ["car", "cyclist"]);
+    let labels: Vec<Label> = rows.iter().map(|r| r.label).collect();
+    assert_eq!(
+        labels,
+        [
+            Label::Class(0),
+            Label::Class(1),
+            Label::Background,
+            Label::Class(1)
+        ]
+    );
+    let os: Vec<f64> = rows.iter().map(|r| r.objectness).collect();
+    assert_eq!(os, [0.5, 1.0, 0.0, 0.25]);
+    assert_eq!(rows[3].logits, [7.0, 8.0]);
+    assert_eq!(rows[3].index, 3);
+}
+
+#[test]
+fn labels_of_every_integer_dtype() {
+    fn check<T: npyz::AutoSerialize + Clone>(labels: &[T]) {
+        let dir = npy_dir();
+        write_npy(&dir.path().join("labels.npy"), &[4], labels);
+        let (_, rows) = read_all(dir.path()).unwrap();
+        let got: Vec<Label> = rows.iter().map(|r| r.label).collect();
+        assert_eq!(&got[..2], [Label::Class(1), Label::Class(0)]);
+    }
+    check(&[1i8, 0, 0, 0]);
+    check(&[1i16, 0, 0, 0]);
+    check(&[1i32, 0, 0, 0]);
+    check(&[1i64, 0, 0, 0]);
+    check(&[1u8, 0, 0, 0]);
+    check(&[1u16, 0, 0, 0]);
+    check(&[1u32, 0, 0, 0]);
+    check(&[1u64, 0, 0, 0]);
+}
+
+/// Applies `edit` to a valid directory and returns the error of reading it.
+fn npy_error(edit: impl FnOnce(&Path)) -> DataError {
+    let dir = npy_dir();
+    edit(dir.path());
+    let err = read_all(dir.path()).unwrap_err();
+    assert!(err.is_bad_input(), "{err}");
+    err
+}
+
+#[test]
+fn every_malformed_npy_directory_is_refused() {
+    // (edit, kind, file, location, column)
+    type Edit = Box<dyn FnOnce(&Path)>;
+    type Case = (
+        Edit,
+        DataErrorKind,
+        &'static str,
+        Option<Location>,
+        Option<&'static str>,
+    );
+    let cases: Vec<Case> = vec![
+        (
+            Box::new(|d: &Path| write_npy(&d.join("logits.npy"), &[8], &[0.0f64; 8])),
+            DataErrorKind::NpyShape {
+                found: vec![8],
+                expected: "(N, K): N rows of K logits",
+            },
+            "logits.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("logits.npy"), &[4, 2], &[1i32; 8])),
+            DataErrorKind::NpyDtype {
+                found: "<i4".into(),
+                expected: "float32 or float64",
+            },
+            "logits.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("logits.npy"), &[4, 1], &[1.0f64; 4])),
+            DataErrorKind::ClassCount { found: 1 },
+            "logits.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("labels.npy"), &[4], &[0.0f32; 4])),
+            DataErrorKind::NpyDtype {
+                found: "<f4".into(),
+                expected: "an integer type",
+            },
+            "labels.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("labels.npy"), &[3], &[0i64; 3])),
+            DataErrorKind::RowCount {
+                expected: 4,
+                found: 3,
+            },
+            "labels.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("labels.npy"), &[4, 1], &[0i64; 4])),
+            DataErrorKind::NpyShape {
+                found: vec![4, 1],
+                expected: "(N,): one value per row",
+            },
+            "labels.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("objectness.npy"), &[5], &[0.5f64; 5])),
+            DataErrorKind::RowCount {
+                expected: 4,
+                found: 5,
+            },
+            "objectness.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("labels.npy"), &[4], &[0i64, 1, 2, 0])),
+            DataErrorKind::LabelIndex {
+                value: 2,
+                classes: 2,
+            },
+            "labels.npy",
+            Some(Location::Row(2)),
+            None,
+        ),
+        (
+            Box::new(|d: &Path| write_npy(&d.join("labels.npy"), &[4], &[-2i8, 1, 1, 0])),
+            DataErrorKind::LabelIndex {
+                value: -2,
+                classes: 2,
+            },
+            "labels.npy",
+            Some(Location::Row(0)),
+            None,
+        ),
+        (
+            Box::new(|d: &Path| {
+                write_npy(
+                    &d.join("objectness.npy"),
+                    &[4],
+                    &[0.5f64, f64::NAN, 0.0, 0.0],
+                )
+            }),
+            DataErrorKind::ObjectnessRange { text: "NaN".into() },
+            "objectness.npy",
+            Some(Location::Row(1)),
+            None,
+        ),
+        (
+            Box::new(|d: &Path| {
+                write_npy(&d.join("objectness.npy"), &[4], &[0.5f64, 1.0, 1.25, 0.0])
+            }),
+            DataErrorKind::ObjectnessRange {
+                text: "1.25".into(),
+            },
+            "objectness.npy",
+            Some(Location::Row(2)),
+            None,
+        ),
+        (
+            Box::new(|d: &Path| {
+                let mut v = [1.0f32; 8];
+                v[5] = f32::INFINITY;
+                write_npy(&d.join("logits.npy"), &[4, 2], &v)
+            }),
+            DataErrorKind::NotFinite { text: "inf".into() },
+            "logits.npy",
+            Some(Location::Row(2)),
+            Some("cyclist"),
+        ),
+        (
+            Box::new(|d: &Path| {
+                let mut v = [1.0f64; 8];
+                v[6] = f64::NAN;
+                write_npy(&d.join("logits.npy"), &[4, 2], &v)
+            }),
+            DataErrorKind::NotFinite { text: "NaN".into() },
+            "logits.npy",
+            Some(Location::Row(3)),
+            Some("car"),
+        ),
+        (
+            Box::new(|d: &Path| {
+                let p = d.join("logits.npy");
+                let bytes = std::fs::read(&p).unwrap();
+                std::fs::write(&p, &bytes[..bytes.len() - 3]).unwrap();
+            }),
+            DataErrorKind::NpySize {
+                expected: 64,
+                found: 61,
+            },
+            "logits.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| {
+                let p = d.join("labels.npy");
+                let mut bytes = std::fs::read(&p).unwrap();
+                bytes.extend_from_slice(&[0; 8]);
+                std::fs::write(&p, &bytes).unwrap();
+            }),
+            DataErrorKind::NpySize {
+                expected: 32,
+                found: 40,
+            },
+            "labels.npy",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| std::fs::write(d.join("classes.txt"), "car\n").unwrap()),
+            DataErrorKind::ClassListLength {
+                expected: 2,
+                found: 1,
+            },
+            "classes.txt",
+            None,
+            None,
+        ),
+        (
+            Box::new(|d: &Path| {
+                std::fs::write(d.join("classes.txt"), "car\nbackground\n").unwrap()
+            }),
+            DataErrorKind::ReservedClassName,
+            "classes.txt",
+            Some(Location::Line(2)),
+            None,
+        ),
+        (
+            Box::new(|d: &Path| std::fs::write(d.join("classes.txt"), "car\ncar\n").unwrap()),
+            DataErrorKind::DuplicateColumn,
+            "classes.txt",
+            Some(Location::Line(2)),
+            None,
+        ),
+        (
+            Box::new(|d: &Path| std::fs::write(d.join("classes.txt"), "\ncar\n").unwrap()),
+            DataErrorKind::EmptyColumnName { index: 1 },
+            "classes.txt",
+            Some(Location::Line(1)),
+            None,
+        ),
+        (
+            Box::new(|d: &Path| std::fs::write(d.join("classes.txt"), b"car\n\xff\n").unwrap()),
+            DataErrorKind::NotUtf8,
+            "classes.txt",
+            None,
+            None,
+        ),
+    ];
+    for (i, (edit, kind, name, location, column)) in cases.into_iter().enumerate() {
+        let err = npy_error(edit);
+        assert_eq!(err.kind(), &kind, "case {i}: {err}");
+        assert!(err.path().ends_with(name), "case {i}: {err}");
+        assert_eq!(err.location(), location, "case {i}: {err}");
+        assert_eq!(err.column(), column, "case {i}: {err}");
+    }
+}
+
+#[test]
+fn a_file_that_is_not_npy_is_refused() {
+    for bytes in [
+        &b""[..],
+        b"id,label\n1,car\n",
+        b"\x93NUMPY\x01\x00\x10\x00{'descr': ",
+    ] {
+        let err = npy_error(|d| std::fs::write(d.join("logits.npy"), bytes).unwrap());
+        assert!(
+            matches!(err.kind(), DataErrorKind::NpyFormat { .. }),
+            "{bytes:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn npy_error_display_says_row_index() {
+    let err = npy_error(|d| write_npy(&d.join("labels.npy"), &[4], &[0i64, 1, 7, 0]));
+    let shown = err.to_string();
+    assert!(
+        shown.ends_with(
+            "labels.npy: row index 2: label 7 is not a class index (0 to 1) or -1 (background)"
+        ),
+        "{shown}"
+    );
+}
