@@ -6,3 +6,6 @@
 //! exactly what the device computes.
 
 pub use crate::dyn_table::DynTable;
+
+pub mod baselines;
+pub mod metrics;
