@@ -7,10 +7,10 @@
 
 pub use crate::dyn_table::DynTable;
 
-
+pub mod baselines;
 pub mod dataset;
 pub mod fit;
-
+pub mod metrics;
 pub mod tune;
 
 #[cfg(feature = "cli")]
