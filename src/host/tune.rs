@@ -94,7 +94,10 @@ impl std::error::Error for TuneError {}
 /// A message naming what is wrong.
 pub fn parse_bins(spec: &str) -> Result<Vec<usize>, String> {
     let num = |s: &str| -> Result<usize, String> {
-        let n: usize = s.trim().parse().map_err(|_| format!("`{s}` is not a bin count"))?;
+        let n: usize = s
+            .trim()
+            .parse()
+            .map_err(|_| format!("`{s}` is not a bin count"))?;
         if n == 0 || n > usize::from(u16::MAX) {
             return Err(format!("bin count {n} is not in 1..=65535"));
         }
@@ -131,7 +134,11 @@ pub fn lambda_grid(min: f64, max: f64, per_decade: usize) -> Result<Vec<f32>, St
     let steps = (decades * per_decade as f64).round() as usize;
     let mut out: Vec<f32> = (0..=steps)
         .map(|s| {
-            let t = if steps == 0 { 0.0 } else { s as f64 / steps as f64 };
+            let t = if steps == 0 {
+                0.0
+            } else {
+                s as f64 / steps as f64
+            };
             (min * (max / min).powf(t)) as f32
         })
         .filter(|&l| l > 0.0)
@@ -230,11 +237,7 @@ fn sweep(
     let mut scratch = vec![0.0f32; k];
     for &lambda in lambdas {
         let mut acc = Accumulator::new();
-        for ((e, &os), &label) in evidence
-            .chunks_exact(k)
-            .zip(val.objectness)
-            .zip(val.labels)
-        {
+        for ((e, &os), &label) in evidence.chunks_exact(k).zip(val.objectness).zip(val.labels) {
             if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
                 acc.add(&scores, label);
             }
@@ -305,7 +308,9 @@ where
     for (done, &b) in all.iter().enumerate() {
         let hists = histograms(b).map_err(TuneError::Histogram)?;
         if hists.len() != k {
-            return Err(TuneError::Histogram(format!("{b} bins: expected {k} histograms")));
+            return Err(TuneError::Histogram(format!(
+                "{b} bins: expected {k} histograms"
+            )));
         }
         for (e_row, x_row) in evidence.chunks_exact_mut(k).zip(val.logits.chunks_exact(k)) {
             for ((e, &x), h) in e_row.iter_mut().zip(x_row).zip(&hists) {

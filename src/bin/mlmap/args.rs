@@ -1,0 +1,220 @@
+//! Command-line flags (DESIGN §4 is the stable interface; more flags are welcome).
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+/// Fit, tune, apply and evaluate ML/MAP tables for object detectors.
+#[derive(Debug, Parser)]
+#[command(name = "mlmap", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Fit a table from training logits.
+    Fit(FitArgs),
+    /// Choose bin counts and lambdas on validation data, and write the best table.
+    Tune(TuneArgs),
+    /// Score every row of a file through the layer and write the scores as CSV.
+    Apply(ApplyArgs),
+    /// Compare sigmoid, softmax, temperature, ML and MAP on labelled data.
+    Eval(EvalArgs),
+    /// Print a readable summary of a table.
+    Inspect(InspectArgs),
+    /// Run the whole job on the data shipped in examples/data.
+    Demo(DemoArgs),
+}
+
+/// How the fit places the bin edges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Edges {
+    /// B equal bins over [min, max] of the training logits (numpy.histogram).
+    Linspace,
+    /// The edges MATLAB's histogram(x, nbins) picks (the paper's tables).
+    Matlab,
+}
+
+/// Likelihood above the last edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Tail {
+    /// No likelihood above the training support (the paper's behaviour).
+    Zero,
+    /// Logits above the last edge use the last bin.
+    Clamp,
+}
+
+/// Flags of `fit`.
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Training data: a CSV file or an NPY directory.
+    #[arg(long, value_name = "FILE")]
+    pub train: PathBuf,
+    /// Bins of the ML histograms.
+    #[arg(long, default_value_t = 22, value_name = "N")]
+    pub bins_ml: usize,
+    /// Additive smoothing of the ML head.
+    #[arg(long, default_value_t = 0.0055, value_name = "X")]
+    pub lambda_ml: f32,
+    /// Bins of the MAP histograms.
+    #[arg(long, default_value_t = 17, value_name = "N")]
+    pub bins_map: usize,
+    /// Additive smoothing of the MAP head.
+    #[arg(long, default_value_t = 0.00012, value_name = "X")]
+    pub lambda_map: f32,
+    /// Edge placement.
+    #[arg(long, value_enum, default_value_t = Edges::Linspace)]
+    pub edges: Edges,
+    /// Likelihood above the last edge.
+    #[arg(long, value_enum, default_value_t = Tail::Zero)]
+    pub upper_tail: Tail,
+    /// The table file to write.
+    #[arg(long, short, value_name = "TABLE")]
+    pub output: PathBuf,
+}
+
+/// What `tune` minimises on the validation set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Objective {
+    /// Expected calibration error (10 bins, DESIGN §1.5).
+    Ece,
+    /// Negative log-likelihood of the labelled rows.
+    Nll,
+    /// Brier score over all rows.
+    Brier,
+}
+
+/// Flags of `tune`.
+#[derive(Debug, Args)]
+pub struct TuneArgs {
+    /// Training data (CSV file or NPY directory).
+    #[arg(long, value_name = "FILE")]
+    pub train: PathBuf,
+    /// Validation data the candidates are scored on.
+    #[arg(long, value_name = "FILE")]
+    pub val: PathBuf,
+    /// What to minimise.
+    #[arg(long, value_enum, default_value_t = Objective::Ece)]
+    pub objective: Objective,
+    /// ML bin counts to try: `N`, `A..B` (inclusive) or `A,B,C`.
+    #[arg(long, default_value = "4..40", value_name = "SET")]
+    pub bins_ml: String,
+    /// MAP bin counts to try: `N`, `A..B` (inclusive) or `A,B,C`.
+    #[arg(long, default_value = "4..40", value_name = "SET")]
+    pub bins_map: String,
+    /// Smallest lambda of the log grid (both heads).
+    #[arg(long, default_value_t = 1e-8, value_name = "X")]
+    pub lambda_min: f64,
+    /// Largest lambda of the log grid (both heads).
+    #[arg(long, default_value_t = 1e-1, value_name = "X")]
+    pub lambda_max: f64,
+    /// Lambdas per decade of the log grid.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub lambdas_per_decade: usize,
+    /// Edge placement.
+    #[arg(long, value_enum, default_value_t = Edges::Linspace)]
+    pub edges: Edges,
+    /// Likelihood above the last edge.
+    #[arg(long, value_enum, default_value_t = Tail::Zero)]
+    pub upper_tail: Tail,
+    /// How many of the best candidates to print per head.
+    #[arg(long, default_value_t = 5, value_name = "N")]
+    pub top: usize,
+    /// The table file to write (the best candidate of each head).
+    #[arg(long, short, value_name = "TABLE")]
+    pub output: PathBuf,
+}
+
+/// Flags of `apply`.
+#[derive(Debug, Args)]
+pub struct ApplyArgs {
+    /// The table.
+    #[arg(long, value_name = "TABLE")]
+    pub table: PathBuf,
+    /// Rows to score (CSV file or NPY directory; labels optional).
+    #[arg(long, value_name = "FILE")]
+    pub input: PathBuf,
+    /// The CSV file to write.
+    #[arg(long, short, value_name = "FILE.csv")]
+    pub output: PathBuf,
+}
+
+/// Output format of `eval` and `inspect`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// An aligned text table.
+    Text,
+    /// One JSON object.
+    Json,
+    /// A markdown table.
+    Markdown,
+}
+
+/// Bin closure of the ECE.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Binning {
+    /// `((m-1)/M, m/M]`, conf = 0 in the first bin (DESIGN §1.5).
+    Default,
+    /// `[lo, hi)` bins, as netcal.
+    Netcal,
+    /// `[lo, hi)` bins with conf = 1 in an extra bin, as torchmetrics.
+    Torchmetrics,
+}
+
+/// Flags of `eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// The table.
+    #[arg(long, value_name = "TABLE")]
+    pub table: PathBuf,
+    /// Labelled test data.
+    #[arg(long, value_name = "FILE")]
+    pub test: PathBuf,
+    /// Labelled validation data (fits the temperature baseline).
+    #[arg(long, value_name = "FILE")]
+    pub val: Option<PathBuf>,
+    /// Out-of-distribution data (never-seen objects; labels ignored).
+    #[arg(long, value_name = "FILE")]
+    pub ood: Option<PathBuf>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+    /// Write SVG plots into this directory (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub plots: Option<PathBuf>,
+    /// ECE bins.
+    #[arg(long, default_value_t = 10, value_name = "M")]
+    pub ece_bins: usize,
+    /// ECE bin closure convention.
+    #[arg(long, value_enum, default_value_t = Binning::Default)]
+    pub ece_binning: Binning,
+}
+
+/// Flags of `inspect`.
+#[derive(Debug, Args)]
+pub struct InspectArgs {
+    /// The table file.
+    #[arg(value_name = "TABLE")]
+    pub table: PathBuf,
+    /// Also print every bin's edges and frequency.
+    #[arg(long)]
+    pub bins: bool,
+    /// Output format (`markdown` is treated as text).
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+}
+
+/// Flags of `demo`.
+#[derive(Debug, Args)]
+pub struct DemoArgs {
+    /// Directory holding train.csv, val.csv, test.csv and ood.csv.
+    #[arg(long, default_value = "examples/data", value_name = "DIR")]
+    pub data: PathBuf,
+    /// Directory the tables, reports and plots are written into.
+    #[arg(long, default_value = "mlmap-demo", value_name = "DIR")]
+    pub output: PathBuf,
+}

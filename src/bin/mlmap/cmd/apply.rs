@@ -1,0 +1,84 @@
+//! `mlmap apply`: score every row through the layer, write CSV (DESIGN §4).
+
+use mlmap::host::dataset::Label;
+use mlmap::Libm;
+
+use crate::args::ApplyArgs;
+use crate::cmd::inspect::read_table;
+use crate::error::{CliError, Result};
+use crate::load;
+use crate::output;
+
+pub fn run(args: &ApplyArgs) -> Result<()> {
+    let (table, _) = read_table(&args.table)?;
+    let src = load::open(&args.input)?;
+    load::check_classes(&args.input, src.classes(), table.class_names())?;
+    let names: Vec<&str> = table.class_names().collect();
+    let k = names.len();
+    let out_path = &args.output;
+    let csv_err = |e: csv::Error| CliError::internal(out_path, format!("cannot write: {e}"));
+    output::write_atomic(out_path, |w| {
+        let mut csv = csv::Writer::from_writer(w);
+        let mut header: Vec<String> = Vec::new();
+        if src.has_ids() {
+            header.push("id".into());
+        }
+        if src.has_labels() {
+            header.push("label".into());
+        }
+        header.extend(names.iter().map(|n| format!("ml_{n}")));
+        header.extend(names.iter().map(|n| format!("map_{n}")));
+        header.push("ml_pred".into());
+        header.push("map_pred".into());
+        csv.write_record(&header).map_err(csv_err)?;
+        let mut x = vec![0.0f32; k];
+        let mut ml = vec![0.0f32; k];
+        let mut map = vec![0.0f32; k];
+        let mut scratch = vec![0.0f32; k];
+        let mut record: Vec<String> = Vec::with_capacity(header.len());
+        src.for_each_row(|row| -> Result<()> {
+            for (d, &s) in x.iter_mut().zip(row.logits) {
+                *d = s as f32;
+            }
+            let os = row.objectness as f32;
+            let at = |e: mlmap::InferError| {
+                CliError::input(&args.input, format!("{:?}: {e}", row.location()))
+            };
+            table.ml_into(&x, os, &mut ml, &mut scratch).map_err(at)?;
+            table
+                .map_into::<Libm>(&x, os, &mut map, &mut scratch)
+                .map_err(at)?;
+            record.clear();
+            if src.has_ids() {
+                record.push(row.id.unwrap_or("").to_string());
+            }
+            if src.has_labels() {
+                record.push(match row.label {
+                    Label::Class(c) => names.get(c).copied().unwrap_or("").to_string(),
+                    Label::Background => "background".to_string(),
+                    Label::Missing => String::new(),
+                });
+            }
+            record.extend(ml.iter().map(|v| v.to_string()));
+            record.extend(map.iter().map(|v| v.to_string()));
+            record.push(
+                names
+                    .get(mlmap::argmax(&ml))
+                    .copied()
+                    .unwrap_or("")
+                    .to_string(),
+            );
+            record.push(
+                names
+                    .get(mlmap::argmax(&map))
+                    .copied()
+                    .unwrap_or("")
+                    .to_string(),
+            );
+            csv.write_record(&record).map_err(csv_err)?;
+            Ok(())
+        })?;
+        csv.flush()
+            .map_err(|e| CliError::internal(out_path, format!("cannot write: {e}")))
+    })
+}

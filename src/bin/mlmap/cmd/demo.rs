@@ -1,0 +1,198 @@
+//! `mlmap demo`: the whole job on the data shipped in `examples/data/`.
+//!
+//! 1. fit a table with the authors' detection settings (22 / 17 bins);
+//! 2. tune both lambdas on the validation set, keeping the firmware's shape 22 / 17;
+//! 3. evaluate sigmoid, softmax, temperature, ML and MAP on the test set and on the
+//!    never-seen objects;
+//! 4. decode the written table with the no_std layer (`Table<3, 22, 17>`) and check
+//!    that it scores every test row bit for bit like the host.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use mlmap::host::fit::{FitParams, TrainingSet};
+use mlmap::host::metrics::MetricsConfig;
+use mlmap::host::tune::{self, Objective};
+use mlmap::host::DynTable;
+use mlmap::{EdgeMode, Table, UpperTail};
+
+use crate::args::{DemoArgs, Format};
+use crate::cmd::eval::{self, Evaluation, Inputs};
+use crate::cmd::fit::{fit_error, summary, write_table};
+use crate::cmd::tune::{render, search, Grid};
+use crate::error::{CliError, Result};
+use crate::load::{self, Loaded};
+use crate::output;
+
+/// The shape the demo's firmware is built for.
+type Firmware = Table<3, 22, 17>;
+
+/// Scores every row with the decoded fixed-size table and with the host table;
+/// returns (rows compared, rows whose scores differ in any bit).
+fn device_check(
+    bytes: &[u8],
+    host: &DynTable,
+    data: &Loaded,
+    path: &Path,
+) -> Result<(usize, usize)> {
+    let device = Firmware::from_bytes(bytes)
+        .map_err(|e| CliError::Internal(format!("the no_std layer refused the table: {e}")))?;
+    let (ml_host, map_host) = eval::layer_scores(host, data, path)?;
+    let mut differ = 0;
+    let rows = data.logits.chunks_exact(3).zip(&data.objectness);
+    let host_rows = ml_host.chunks_exact(3).zip(map_host.chunks_exact(3));
+    for ((x, &os), (ml_h, map_h)) in rows.zip(host_rows) {
+        let mut xs = [0f32; 3];
+        for (d, &v) in xs.iter_mut().zip(x) {
+            *d = v as f32;
+        }
+        let x = xs;
+        let (ml, map) = match (device.ml(&x, os as f32), device.map(&x, os as f32)) {
+            (Ok(a), Ok(b)) => (a, b),
+            (Err(e), _) | (_, Err(e)) => return Err(CliError::input(path, e)),
+        };
+        let same = |d: &[f32; 3], h: &[f64]| {
+            d.iter()
+                .zip(h)
+                .all(|(a, &b)| a.to_bits() == (b as f32).to_bits())
+        };
+        if !same(&ml.0, ml_h) || !same(&map.0, map_h) {
+            differ += 1;
+        }
+    }
+    Ok((data.len(), differ))
+}
+
+fn value(ev: &Evaluation, method: &str, key: &str) -> Option<f64> {
+    ev.reports
+        .iter()
+        .find(|r| r.method == method)
+        .and_then(|r| r.metrics.iter().find(|(k, _)| k == key))
+        .and_then(|(_, v)| *v)
+}
+
+pub fn run(a: &DemoArgs) -> Result<()> {
+    let path = |name: &str| a.data.join(name);
+    let (train_p, val_p, test_p, ood_p) = (
+        path("train.csv"),
+        path("val.csv"),
+        path("test.csv"),
+        path("ood.csv"),
+    );
+    std::fs::create_dir_all(&a.output)
+        .map_err(|e| CliError::input(&a.output, format!("cannot create: {e}")))?;
+    let mut log = String::new();
+    let _ = writeln!(
+        log,
+        "mlmap demo: synthetic detector data from {}\n",
+        a.data.display()
+    );
+
+    // 1. Fit with the authors' detection settings.
+    let train = TrainingSet::read(&load::open(&train_p)?).map_err(fit_error)?;
+    let fitted = train.fit(&FitParams::default()).map_err(fit_error)?;
+    let fitted_path = a.output.join("fitted.mlmap");
+    let size = write_table(&fitted_path, &fitted)?;
+    let _ = writeln!(log, "1. fit (authors' detection settings)");
+    log.push_str(&summary(&fitted_path, &fitted, size));
+
+    // 2. Tune both lambdas on the validation set at the firmware's shape.
+    let val = load::load(&val_p)?;
+    let grid = Grid {
+        bins_ml: vec![22],
+        bins_map: vec![17],
+        lambdas: tune::lambda_grid(1e-8, 1e-1, 4).map_err(CliError::Input)?,
+        objective: Objective::Ece,
+        edges: EdgeMode::Linspace,
+        tail: UpperTail::Zero,
+    };
+    let (result, tuned) = search(&train, &val, &val_p, &grid)?;
+    let tuned_path = a.output.join("tuned.mlmap");
+    let size = write_table(&tuned_path, &tuned)?;
+    let tune_text = render(
+        &result,
+        grid.objective,
+        5,
+        (grid.lambdas.len(), grid.lambdas.len()),
+    );
+    output::write_bytes_atomic(&a.output.join("tune.txt"), tune_text.as_bytes())?;
+    let _ = writeln!(
+        log,
+        "\n2. tune lambdas on {} (ECE, bins kept at 22 / 17)",
+        val_p.display()
+    );
+    log.push_str(&summary(&tuned_path, &tuned, size));
+
+    // 3. Evaluate the five methods.
+    let test = load::load(&test_p)?;
+    let ood = load::load(&ood_p)?;
+    let config = MetricsConfig::default();
+    let ev = eval::evaluate(&Inputs {
+        table: &tuned,
+        test: &test,
+        test_path: &test_p,
+        val: Some((&val, &val_p)),
+        ood: Some((&ood, &ood_p)),
+        config,
+    })?;
+    for (format, name) in [
+        (Format::Text, "eval.txt"),
+        (Format::Json, "eval.json"),
+        (Format::Markdown, "eval.md"),
+    ] {
+        output::write_bytes_atomic(&a.output.join(name), ev.render(format, &config).as_bytes())?;
+    }
+    let plots_dir = a.output.join("plots");
+    let n_plots = ev.plot(&plots_dir, &tuned, config.bins)?;
+    let _ = writeln!(
+        log,
+        "\n3. evaluate on {} and {}",
+        test_p.display(),
+        ood_p.display()
+    );
+    log.push_str(&ev.render(Format::Text, &config));
+
+    // 4. The no_std layer decodes the written table and scores like the host.
+    let bytes = std::fs::read(&tuned_path).map_err(|e| CliError::internal(&tuned_path, e))?;
+    let (n, differ) = device_check(&bytes, &tuned, &test, &test_p)?;
+    let _ = writeln!(
+        log,
+        "\n4. no_std layer: Table<3, 22, 17>::from_bytes({}) scored {n} test rows: {} with scores differing from the host's in any bit",
+        tuned_path.display(),
+        differ
+    );
+    if differ != 0 {
+        output::print(&log)?;
+        return Err(CliError::Internal(format!(
+            "{differ} rows differ between the no_std layer and the host"
+        )));
+    }
+
+    let pct = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1}%", 100.0 * v));
+    let num = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
+    let _ = writeln!(log, "\nsummary");
+    let _ = writeln!(
+        log,
+        "  calibration (ECE, lower is better): sigmoid {}, softmax {}, temperature {}, ML {}, MAP {}",
+        num(value(&ev, "sigmoid", "ece")),
+        num(value(&ev, "softmax", "ece")),
+        num(value(&ev, "temperature", "ece")),
+        num(value(&ev, "ml", "ece")),
+        num(value(&ev, "map", "ece")),
+    );
+    let _ = writeln!(
+        log,
+        "  never-seen objects scored above 0.9: sigmoid {}, softmax {}, temperature {}, ML {}, MAP {}",
+        pct(value(&ev, "sigmoid", "ood_over_0_9")),
+        pct(value(&ev, "softmax", "ood_over_0_9")),
+        pct(value(&ev, "temperature", "ood_over_0_9")),
+        pct(value(&ev, "ml", "ood_over_0_9")),
+        pct(value(&ev, "map", "ood_over_0_9")),
+    );
+    let _ = writeln!(
+        log,
+        "  wrote fitted.mlmap, tuned.mlmap, tune.txt, eval.txt, eval.json, eval.md and {n_plots} plots into {}",
+        a.output.display()
+    );
+    output::print(&log)
+}

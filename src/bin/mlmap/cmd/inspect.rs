@@ -1,0 +1,181 @@
+//! `mlmap inspect TABLE`: a readable summary of a table file.
+
+use std::fmt::Write as _;
+use std::fs;
+
+use mlmap::host::DynTable;
+use mlmap::{EdgeMode, Histogram, UpperTail};
+
+use crate::args::{Format, InspectArgs};
+use crate::error::{CliError, Result};
+use crate::output;
+
+/// Reads and validates a table file, with errors naming it.
+pub fn read_table(path: &std::path::Path) -> Result<(DynTable, Vec<u8>)> {
+    let bytes = fs::read(path).map_err(|e| CliError::input(path, e))?;
+    let table = DynTable::from_bytes(&bytes).map_err(|e| CliError::input(path, e))?;
+    Ok((table, bytes))
+}
+
+pub fn edge_mode_name(m: EdgeMode) -> &'static str {
+    match m {
+        EdgeMode::Linspace => "linspace",
+        EdgeMode::Matlab => "matlab",
+    }
+}
+
+pub fn tail_name(t: UpperTail) -> &'static str {
+    match t {
+        UpperTail::Zero => "zero",
+        UpperTail::Clamp => "clamp",
+    }
+}
+
+/// Eight-level bar characters, lowest first.
+const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
+
+/// A text sparkline of the frequencies, scaled to the largest.
+fn sparkline(freqs: &[f32]) -> String {
+    let max = freqs.iter().copied().fold(0.0f32, f32::max);
+    freqs
+        .iter()
+        .map(|&f| {
+            if f <= 0.0 || max <= 0.0 {
+                ' '
+            } else {
+                let level = ((f / max) * 7.0).round() as usize;
+                BARS.get(level.min(7)).copied().unwrap_or('█')
+            }
+        })
+        .collect()
+}
+
+fn histogram_lines(s: &mut String, head: &str, name: &str, h: &Histogram<Vec<f32>>, bins: bool) {
+    let _ = writeln!(
+        s,
+        "  {head:<4} {name:<12} [{:>9.4}, {:>9.4}]  |{}|",
+        h.lo(),
+        h.hi(),
+        sparkline(h.frequencies())
+    );
+    if bins {
+        for (k, f) in h.frequencies().iter().enumerate() {
+            let close = if k + 1 == h.bins() { ']' } else { ')' };
+            let _ = writeln!(
+                s,
+                "         bin {k:>3}  [{:>10.5}, {:>10.5}{close}  {f:.6}",
+                h.edge(k),
+                h.edge(k + 1)
+            );
+        }
+    }
+}
+
+/// The text report.
+pub fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -> String {
+    let st = t.settings();
+    let crc = bytes
+        .get(bytes.len().saturating_sub(4)..)
+        .and_then(|b| <[u8; 4]>::try_from(b).ok())
+        .map_or(0, u32::from_le_bytes);
+    let mut s = String::new();
+    let _ = writeln!(s, "table       {}", path.display());
+    let _ = writeln!(
+        s,
+        "format      version {}, {} bytes, CRC-32 {crc:08x} (verified)",
+        mlmap::FORMAT_VERSION,
+        bytes.len()
+    );
+    let names: Vec<&str> = t.class_names().collect();
+    let _ = writeln!(s, "classes     {}: {}", t.k(), names.join(", "));
+    let _ = writeln!(
+        s,
+        "edges       {}, upper tail {}",
+        edge_mode_name(st.edge_mode),
+        tail_name(st.upper_tail)
+    );
+    let _ = writeln!(
+        s,
+        "ML head     {} bins, lambda {:e}",
+        t.bins_ml(),
+        st.lambda_ml
+    );
+    let _ = writeln!(
+        s,
+        "MAP head    {} bins, lambda {:e}",
+        t.bins_map(),
+        st.lambda_map
+    );
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "{:<12} {:>10} {:>11} {:>11}",
+        "class", "rows", "prior mean", "prior var"
+    );
+    for ((name, rows), g) in names.iter().zip(t.rows()).zip(t.priors()) {
+        let _ = writeln!(
+            s,
+            "{name:<12} {rows:>10} {:>11.5} {:>11.5}",
+            g.mean(),
+            g.variance()
+        );
+    }
+    let _ = writeln!(s);
+    let _ = writeln!(s, "histograms (support, then frequencies as a sparkline)");
+    for (name, h) in names.iter().zip(t.ml_histograms()) {
+        histogram_lines(&mut s, "ML", name, h, bins);
+    }
+    for (name, h) in names.iter().zip(t.map_histograms()) {
+        histogram_lines(&mut s, "MAP", name, h, bins);
+    }
+    s
+}
+
+/// The JSON report.
+pub fn render_json(path: &std::path::Path, t: &DynTable, bytes: &[u8]) -> String {
+    let st = t.settings();
+    let hist = |h: &Histogram<Vec<f32>>| {
+        let edges: Vec<f32> = (0..=h.bins()).map(|k| h.edge(k)).collect();
+        serde_json::json!({ "edges": edges, "frequencies": h.frequencies() })
+    };
+    let classes: Vec<serde_json::Value> = t
+        .class_names()
+        .zip(t.rows())
+        .zip(t.priors())
+        .zip(t.ml_histograms().iter().zip(t.map_histograms()))
+        .map(|(((name, rows), g), (ml, map))| {
+            serde_json::json!({
+                "name": name,
+                "rows": rows,
+                "prior": { "mean": g.mean(), "variance": g.variance() },
+                "ml": hist(ml),
+                "map": hist(map),
+            })
+        })
+        .collect();
+    let v = serde_json::json!({
+        "path": path.display().to_string(),
+        "format_version": mlmap::FORMAT_VERSION,
+        "bytes": bytes.len(),
+        "crc_ok": true,
+        "edge_mode": edge_mode_name(st.edge_mode),
+        "upper_tail": tail_name(st.upper_tail),
+        "bins_ml": t.bins_ml(),
+        "bins_map": t.bins_map(),
+        "lambda_ml": st.lambda_ml,
+        "lambda_map": st.lambda_map,
+        "classes": classes,
+    });
+    let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
+    s.push('\n');
+    s
+}
+
+pub fn run(args: &InspectArgs) -> Result<()> {
+    let (table, bytes) = read_table(&args.table)?;
+    let text = match args.format {
+        Format::Json => render_json(&args.table, &table, &bytes),
+        Format::Text | Format::Markdown => render_text(&args.table, &table, &bytes, args.bins),
+    };
+    output::print(&text)
+}

@@ -1,0 +1,192 @@
+//! `mlmap tune`: search bin counts and lambdas of both heads on validation data.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use mlmap::host::fit::{build_table, TrainingSet};
+use mlmap::host::tune::{self, Candidate, Objective, TuneResult, ValRows};
+use mlmap::host::DynTable;
+use mlmap::{EdgeMode, Gaussian, Histogram, Settings, UpperTail};
+
+use crate::args::{self, TuneArgs};
+use crate::cmd::fit::{fit_error, summary, write_table};
+use crate::error::{CliError, Result};
+use crate::load::{self, Loaded};
+use crate::output;
+
+/// The grid and policies of a search.
+pub struct Grid {
+    pub bins_ml: Vec<usize>,
+    pub bins_map: Vec<usize>,
+    pub lambdas: Vec<f32>,
+    pub objective: Objective,
+    pub edges: EdgeMode,
+    pub tail: UpperTail,
+}
+
+/// The objective's name as printed.
+pub fn objective_name(o: Objective) -> &'static str {
+    match o {
+        Objective::Ece => "ece",
+        Objective::Nll => "nll",
+        Objective::Brier => "brier",
+    }
+}
+
+/// Runs the search and builds the table of the best candidates.
+pub fn search(
+    train: &TrainingSet,
+    val: &Loaded,
+    val_path: &Path,
+    grid: &Grid,
+) -> Result<(TuneResult, DynTable)> {
+    let names: Vec<&str> = train.moments().iter().map(|m| m.name()).collect();
+    load::check_classes(val_path, &val.classes, names.iter().copied())?;
+    let labels = val.class_labels(val_path)?;
+    let logits = val.logits_f32();
+    let objectness = val.objectness_f32();
+    let rows = ValRows {
+        k: names.len(),
+        logits: &logits,
+        objectness: &objectness,
+        labels: &labels,
+    };
+    let priors = train
+        .moments()
+        .iter()
+        .map(|m| {
+            Gaussian::new(m.mean() as f32, m.prior_variance() as f32).map_err(|e| {
+                CliError::input(train.path(), format!("class {}: prior {e:?}", m.name()))
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let histograms = |b: usize| -> std::result::Result<Vec<Histogram<Vec<f32>>>, String> {
+        train
+            .histograms(b, grid.edges)
+            .map_err(|e| e.to_string())?
+            .iter()
+            .map(|h| {
+                Histogram::new(h.lo(), h.hi(), h.frequencies())
+                    .map_err(|e| format!("{b} bins: {e:?}"))
+            })
+            .collect()
+    };
+    let total = {
+        let mut all: Vec<usize> = grid.bins_ml.iter().chain(&grid.bins_map).copied().collect();
+        all.sort_unstable();
+        all.dedup();
+        all.len() as u64
+    };
+    let bar = ProgressBar::new(total).with_message("bin counts");
+    if let Ok(style) = ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} [{elapsed}]") {
+        bar.set_style(style);
+    }
+    let result = tune::search(
+        histograms,
+        &priors,
+        grid.tail,
+        &rows,
+        &grid.bins_ml,
+        &grid.bins_map,
+        &grid.lambdas,
+        grid.objective,
+        |done, _| bar.set_position(done as u64),
+    )
+    .map_err(|e| CliError::input(val_path, e))?;
+    bar.finish_and_clear();
+    let (best_ml, best_map) = match (result.ml.first(), result.map.first()) {
+        (Some(a), Some(b)) => (*a, *b),
+        _ => return Err(CliError::Input("tune: the search grid is empty".into())),
+    };
+    let ml = train
+        .histograms(best_ml.bins, grid.edges)
+        .map_err(fit_error)?;
+    let map = train
+        .histograms(best_map.bins, grid.edges)
+        .map_err(fit_error)?;
+    let settings = Settings {
+        lambda_ml: best_ml.lambda,
+        lambda_map: best_map.lambda,
+        edge_mode: grid.edges,
+        upper_tail: grid.tail,
+    };
+    let table = build_table(train.moments(), &ml, &map, settings).map_err(fit_error)?;
+    Ok((result, table))
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.5}"))
+}
+
+/// The best `top` candidates of each head as an aligned table.
+pub fn render(
+    result: &TuneResult,
+    objective: Objective,
+    top: usize,
+    n_candidates: (usize, usize),
+) -> String {
+    let mut s = String::new();
+    let heads: [(&str, &[Candidate], usize); 2] = [
+        ("ML", &result.ml, n_candidates.0),
+        ("MAP", &result.map, n_candidates.1),
+    ];
+    for (head, cands, n) in heads {
+        let _ = writeln!(
+            s,
+            "{head} head: best {} of {n} candidates by {}",
+            top.min(cands.len()),
+            objective_name(objective)
+        );
+        let _ = writeln!(
+            s,
+            "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9}",
+            "rank", "bins", "lambda", "ece", "nll", "brier"
+        );
+        for (i, c) in cands.iter().take(top).enumerate() {
+            let _ = writeln!(
+                s,
+                "  {:>4} {:>5} {:>11.3e} {:>9.5} {:>9} {:>9.5}",
+                i + 1,
+                c.bins,
+                c.lambda,
+                c.ece,
+                fmt_opt(c.nll),
+                c.brier
+            );
+        }
+    }
+    s
+}
+
+pub fn run(a: &TuneArgs) -> Result<()> {
+    let bins_ml =
+        tune::parse_bins(&a.bins_ml).map_err(|e| CliError::Input(format!("--bins-ml: {e}")))?;
+    let bins_map =
+        tune::parse_bins(&a.bins_map).map_err(|e| CliError::Input(format!("--bins-map: {e}")))?;
+    let lambdas = tune::lambda_grid(a.lambda_min, a.lambda_max, a.lambdas_per_decade)
+        .map_err(|e| CliError::Input(format!("--lambda-min/--lambda-max: {e}")))?;
+    let grid = Grid {
+        bins_ml,
+        bins_map,
+        lambdas,
+        objective: match a.objective {
+            args::Objective::Ece => Objective::Ece,
+            args::Objective::Nll => Objective::Nll,
+            args::Objective::Brier => Objective::Brier,
+        },
+        edges: super::edge_mode(a.edges),
+        tail: super::upper_tail(a.upper_tail),
+    };
+    let train = TrainingSet::read(&load::open(&a.train)?).map_err(fit_error)?;
+    let val = load::load(&a.val)?;
+    let (result, table) = search(&train, &val, &a.val, &grid)?;
+    let size = write_table(&a.output, &table)?;
+    let n = (
+        grid.bins_ml.len() * grid.lambdas.len(),
+        grid.bins_map.len() * grid.lambdas.len(),
+    );
+    let mut text = render(&result, grid.objective, a.top, n);
+    text.push_str(&summary(&a.output, &table, size));
+    output::print(&text)
+}
