@@ -45,23 +45,15 @@ pub struct Candidate {
     pub bins: usize,
     /// Smoothing lambda (as stored in the table, `f32`).
     pub lambda: f32,
-    /// Expected calibration error (10 bins, DESIGN default binning).
-    pub ece: f64,
-    /// Mean NLL of the labelled rows (`None` without labelled rows).
+    /// The objective's value (lower is better; a missing NLL counts as +inf).
+    pub objective: f64,
+    /// Expected calibration error (10 bins, DESIGN default binning); computed for the
+    /// best candidates only (see [`search`]).
+    pub ece: Option<f64>,
+    /// Mean NLL of the labelled rows; for the best candidates only.
     pub nll: Option<f64>,
-    /// Mean Brier score.
-    pub brier: f64,
-}
-
-impl Candidate {
-    /// The value of `objective` (lower is better; a missing NLL is +inf).
-    pub fn value(&self, objective: Objective) -> f64 {
-        match objective {
-            Objective::Ece => self.ece,
-            Objective::Nll => self.nll.unwrap_or(f64::INFINITY),
-            Objective::Brier => self.brier,
-        }
-    }
+    /// Mean Brier score; for the best candidates only.
+    pub brier: Option<f64>,
 }
 
 /// Why a search could not run.
@@ -147,8 +139,10 @@ pub fn lambda_grid(min: f64, max: f64, per_decade: usize) -> Result<Vec<f32>, St
     Ok(out)
 }
 
-/// Running sums of the three objectives over the rows of one candidate.
+/// Running sums of the objectives over the rows of one candidate; `only` restricts
+/// the work to one objective (the NLL's logarithm is the costly part).
 struct Accumulator {
+    only: Option<Objective>,
     bins: [(u64, f64, f64); ECE_BINS],
     n: u64,
     nll_sum: f64,
@@ -174,8 +168,9 @@ pub(crate) fn ece_bin(conf: f64, m_bins: usize) -> usize {
 }
 
 impl Accumulator {
-    fn new() -> Self {
+    fn new(only: Option<Objective>) -> Self {
         Self {
+            only,
             bins: [(0, 0.0, 0.0); ECE_BINS],
             n: 0,
             nll_sum: 0.0,
@@ -184,66 +179,119 @@ impl Accumulator {
         }
     }
 
+    fn wants(&self, o: Objective) -> bool {
+        self.only.is_none_or(|x| x == o)
+    }
+
     fn add(&mut self, scores: &[f32], label: Option<usize>) {
-        let best = crate::argmax(scores);
-        let conf = f64::from(scores.get(best).copied().unwrap_or(0.0));
-        let correct = label == Some(best);
-        if let Some(bin) = self.bins.get_mut(ece_bin(conf, ECE_BINS)) {
-            bin.0 += 1;
-            bin.1 += conf;
-            bin.2 += if correct { 1.0 } else { 0.0 };
-        }
         self.n += 1;
-        if let Some(l) = label {
-            let s = f64::from(scores.get(l).copied().unwrap_or(0.0));
-            self.nll_sum -= s.max(1e-12).ln();
-            self.nll_n += 1;
+        if self.wants(Objective::Ece) {
+            let best = crate::argmax(scores);
+            let conf = f64::from(scores.get(best).copied().unwrap_or(0.0));
+            let correct = label == Some(best);
+            if let Some(bin) = self.bins.get_mut(ece_bin(conf, ECE_BINS)) {
+                bin.0 += 1;
+                bin.1 += conf;
+                bin.2 += if correct { 1.0 } else { 0.0 };
+            }
         }
-        for (i, &s) in scores.iter().enumerate() {
-            let y = if label == Some(i) { 1.0 } else { 0.0 };
-            let d = f64::from(s) - y;
-            self.brier_sum += d * d;
+        if self.wants(Objective::Nll) {
+            if let Some(l) = label {
+                let s = f64::from(scores.get(l).copied().unwrap_or(0.0));
+                self.nll_sum -= s.max(1e-12).ln();
+                self.nll_n += 1;
+            }
+        }
+        if self.wants(Objective::Brier) {
+            for (i, &s) in scores.iter().enumerate() {
+                let y = if label == Some(i) { 1.0 } else { 0.0 };
+                let d = f64::from(s) - y;
+                self.brier_sum += d * d;
+            }
         }
     }
 
-    fn finish(&self, bins: usize, lambda: f32) -> Candidate {
+    fn finish(&self, bins: usize, lambda: f32, objective: Objective) -> Candidate {
         let n = self.n.max(1) as f64;
-        let ece = self
-            .bins
-            .iter()
-            .filter(|b| b.0 > 0)
-            .map(|&(c, conf, acc)| (c as f64 / n) * (acc / c as f64 - conf / c as f64).abs())
-            .sum();
+        let ece = self.wants(Objective::Ece).then(|| {
+            self.bins
+                .iter()
+                .filter(|b| b.0 > 0)
+                .map(|&(c, conf, acc)| (c as f64 / n) * (acc / c as f64 - conf / c as f64).abs())
+                .sum()
+        });
+        let nll = (self.wants(Objective::Nll) && self.nll_n > 0)
+            .then(|| self.nll_sum / self.nll_n as f64);
+        let brier = self.wants(Objective::Brier).then(|| self.brier_sum / n);
+        let value = match objective {
+            Objective::Ece => ece,
+            Objective::Nll => nll,
+            Objective::Brier => brier,
+        };
         Candidate {
             bins,
             lambda,
+            objective: value.unwrap_or(f64::INFINITY),
             ece,
-            nll: (self.nll_n > 0).then(|| self.nll_sum / self.nll_n as f64),
-            brier: self.brier_sum / n,
+            nll,
+            brier,
         }
     }
 }
 
-/// Scores every lambda for one head given the per-row evidence (N x K).
-fn sweep(
+/// Which head a sweep scores.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum HeadKind {
+    Ml,
+    Map,
+}
+
+/// Per-row evidence of one head for one set of histograms: `L` (ML) or `L * P` (MAP,
+/// `P` only where `L > 0`, as the layer computes it).
+fn evidence_into(
+    val: &ValRows<'_>,
+    hists: &[Histogram<Vec<f32>>],
+    pdf: &[f32],
+    tail: UpperTail,
+    head: HeadKind,
+    out: &mut [f32],
+) {
+    let k = val.k;
+    for ((e_row, x_row), p_row) in out
+        .chunks_exact_mut(k)
+        .zip(val.logits.chunks_exact(k))
+        .zip(pdf.chunks_exact(k))
+    {
+        for (((e, &x), h), &p) in e_row.iter_mut().zip(x_row).zip(hists).zip(p_row) {
+            let l = h.likelihood(x, tail);
+            *e = match head {
+                HeadKind::Ml => l,
+                HeadKind::Map if l > 0.0 => l * p,
+                HeadKind::Map => 0.0,
+            };
+        }
+    }
+}
+
+/// Scores one lambda over every row given the evidence.
+fn score(
     val: &ValRows<'_>,
     evidence: &[f32],
     bins: usize,
-    lambdas: &[f32],
-    out: &mut Vec<Candidate>,
-) {
+    lambda: f32,
+    objective: Objective,
+    only: Option<Objective>,
+) -> Candidate {
     let k = val.k;
     let mut scores = vec![0.0f32; k];
     let mut scratch = vec![0.0f32; k];
-    for &lambda in lambdas {
-        let mut acc = Accumulator::new();
-        for ((e, &os), &label) in evidence.chunks_exact(k).zip(val.objectness).zip(val.labels) {
-            if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
-                acc.add(&scores, label);
-            }
+    let mut acc = Accumulator::new(only);
+    for ((e, &os), &label) in evidence.chunks_exact(k).zip(val.objectness).zip(val.labels) {
+        if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
+            acc.add(&scores, label);
         }
-        out.push(acc.finish(bins, lambda));
     }
+    acc.finish(bins, lambda, objective)
 }
 
 /// The search's result: every candidate of each head, best first.
@@ -258,8 +306,10 @@ pub struct TuneResult {
 /// Searches both heads.
 ///
 /// `histograms(b)` returns the K fitted histograms with `b` bins (called once per
-/// distinct bin count); `priors` are the K fitted Gaussians. `progress(done, total)` is
-/// called after each bin count.
+/// distinct bin count); `priors` are the K fitted Gaussians. Every candidate gets its
+/// objective; the best `detail` of each head also get all three metrics. The bin
+/// counts are shared among the machine's cores. `progress(done, total)` is called as
+/// bin counts complete.
 ///
 /// # Errors
 ///
@@ -275,7 +325,8 @@ pub fn search<H>(
     bins_map: &[usize],
     lambdas: &[f32],
     objective: Objective,
-    mut progress: impl FnMut(usize, usize),
+    detail: usize,
+    progress: impl Fn(usize, usize) + Sync,
 ) -> Result<TuneResult, TuneError>
 where
     H: FnMut(usize) -> Result<Vec<Histogram<Vec<f32>>>, String>,
@@ -302,36 +353,76 @@ where
     let mut all: Vec<usize> = bins_ml.iter().chain(bins_map).copied().collect();
     all.sort_unstable();
     all.dedup();
-    let mut ml = Vec::new();
-    let mut map = Vec::new();
-    let mut evidence = vec![0.0f32; n * k];
-    for (done, &b) in all.iter().enumerate() {
+    let mut work = Vec::with_capacity(all.len());
+    for &b in &all {
         let hists = histograms(b).map_err(TuneError::Histogram)?;
         if hists.len() != k {
             return Err(TuneError::Histogram(format!(
                 "{b} bins: expected {k} histograms"
             )));
         }
-        for (e_row, x_row) in evidence.chunks_exact_mut(k).zip(val.logits.chunks_exact(k)) {
-            for ((e, &x), h) in e_row.iter_mut().zip(x_row).zip(&hists) {
-                *e = h.likelihood(x, tail);
-            }
-        }
-        if bins_ml.contains(&b) {
-            sweep(val, &evidence, b, lambdas, &mut ml);
-        }
-        if bins_map.contains(&b) {
-            // The MAP evidence L * P, computed as the layer does (P only where L > 0).
-            for (e, &p) in evidence.iter_mut().zip(&pdf) {
-                *e = if *e > 0.0 { *e * p } else { 0.0 };
-            }
-            sweep(val, &evidence, b, lambdas, &mut map);
-        }
-        progress(done + 1, all.len());
+        work.push((b, hists));
     }
-    let key = |c: &Candidate| c.value(objective);
-    ml.sort_by(|a, b| key(a).total_cmp(&key(b)));
-    map.sort_by(|a, b| key(a).total_cmp(&key(b)));
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .clamp(1, work.len());
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let sweep = |part: &[(usize, Vec<Histogram<Vec<f32>>>)]| {
+        let mut evidence = vec![0.0f32; n * k];
+        let (mut ml, mut map) = (Vec::new(), Vec::new());
+        for (b, hists) in part {
+            for (head, set, out) in [
+                (HeadKind::Ml, bins_ml, &mut ml),
+                (HeadKind::Map, bins_map, &mut map),
+            ] {
+                if set.contains(b) {
+                    evidence_into(val, hists, &pdf, tail, head, &mut evidence);
+                    for &l in lambdas {
+                        out.push(score(val, &evidence, *b, l, objective, Some(objective)));
+                    }
+                }
+            }
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(d, all.len());
+        }
+        (ml, map)
+    };
+    let chunk = work.len().div_ceil(threads);
+    let parts: Vec<(Vec<Candidate>, Vec<Candidate>)> = std::thread::scope(|s| {
+        let handles: Vec<_> = work
+            .chunks(chunk)
+            .map(|part| s.spawn(move || sweep(part)))
+            .collect();
+        handles.into_iter().filter_map(|h| h.join().ok()).collect()
+    });
+    let (mut ml, mut map): (Vec<Candidate>, Vec<Candidate>) = (Vec::new(), Vec::new());
+    for (a, b) in parts {
+        ml.extend(a);
+        map.extend(b);
+    }
+    let expected = |set: &[usize]| set.len() * lambdas.len();
+    if ml.len() != expected(bins_ml) || map.len() != expected(bins_map) {
+        return Err(TuneError::Histogram("a search thread failed".into()));
+    }
+    // Stable order: objective, then fewer bins, then smaller lambda.
+    let order = |a: &Candidate, b: &Candidate| {
+        a.objective
+            .total_cmp(&b.objective)
+            .then(a.bins.cmp(&b.bins))
+            .then(a.lambda.total_cmp(&b.lambda))
+    };
+    ml.sort_by(order);
+    map.sort_by(order);
+    // All three metrics for the best candidates.
+    let mut evidence = vec![0.0f32; n * k];
+    for (head, cands) in [(HeadKind::Ml, &mut ml), (HeadKind::Map, &mut map)] {
+        for c in cands.iter_mut().take(detail) {
+            if let Some((_, hists)) = work.iter().find(|(b, _)| *b == c.bins) {
+                evidence_into(val, hists, &pdf, tail, head, &mut evidence);
+                *c = score(val, &evidence, c.bins, c.lambda, objective, None);
+            }
+        }
+    }
     Ok(TuneResult { ml, map })
 }
 

@@ -105,6 +105,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         objective: Objective::Ece,
         edges: EdgeMode::Linspace,
         tail: UpperTail::Zero,
+        detail: 5,
     };
     let (result, tuned) = search(&train, &val, &val_p, &grid)?;
     let tuned_path = a.output.join("tuned.mlmap");

@@ -23,6 +23,8 @@ pub struct Grid {
     pub objective: Objective,
     pub edges: EdgeMode,
     pub tail: UpperTail,
+    /// How many of the best candidates per head get all three metrics.
+    pub detail: usize,
 }
 
 /// The objective's name as printed.
@@ -91,6 +93,7 @@ pub fn search(
         &grid.bins_map,
         &grid.lambdas,
         grid.objective,
+        grid.detail,
         |done, _| bar.set_position(done as u64),
     )
     .map_err(|e| CliError::input(val_path, e))?;
@@ -146,13 +149,13 @@ pub fn render(
         for (i, c) in cands.iter().take(top).enumerate() {
             let _ = writeln!(
                 s,
-                "  {:>4} {:>5} {:>11.3e} {:>9.5} {:>9} {:>9.5}",
+                "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9}",
                 i + 1,
                 c.bins,
                 c.lambda,
-                c.ece,
+                fmt_opt(c.ece),
                 fmt_opt(c.nll),
-                c.brier
+                fmt_opt(c.brier)
             );
         }
     }
@@ -177,6 +180,7 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         },
         edges: super::edge_mode(a.edges),
         tail: super::upper_tail(a.upper_tail),
+        detail: a.top,
     };
     let train = TrainingSet::read(&load::open(&a.train)?).map_err(fit_error)?;
     let val = load::load(&a.val)?;
