@@ -56,6 +56,15 @@ fn linspace_fit_of_train_csv_equals_the_numpy_reference_byte_for_byte() {
 }
 
 #[test]
+fn the_shipped_default_table_is_the_fit_of_the_shipped_training_data() {
+    // tables/default.mlmap (embedded by build.rs unless MLMAP_TABLE says otherwise) is
+    //   mlmap fit --train examples/data/train.csv --output tables/default.mlmap
+    let shipped = std::fs::read(repo("tables/default.mlmap")).unwrap();
+    let table = fit(&train(), &FitParams::default()).unwrap();
+    assert_eq!(table.to_vec().unwrap(), shipped);
+}
+
+#[test]
 fn matlab_fit_of_train_csv_equals_the_python_reference_byte_for_byte() {
     // tests/golden/train_matlab.mlmap was written by a Python bin picker:
     //   python3 tools/matlab_fit_ref.py examples/data/train.csv tests/golden/train_matlab.mlmap
