@@ -10,3 +10,6 @@ mod layer;
 /// The `.mlmap` format: exact round trips, the reference encoder's bytes, every
 /// corruption and truncation rejected, one error per broken invariant, size bounds.
 mod format;
+
+/// One proptest property per invariant of DESIGN §1.3, on random tables of three shapes.
+mod invariants;
