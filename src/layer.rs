@@ -8,13 +8,19 @@
 //! s_i    = OS * a_i / sum_j a_j
 //! ```
 //!
-//! The normalisation is evaluated as `s_i = OS / (1 + R_i / a_i)` with
-//! `R_i = sum_{j<i} a_j + sum_{j>i} a_j`, the other classes' mass. `R_i` does not depend
-//! on `a_i`, and every operation after it is monotone, so raising `L_i` can never lower
-//! `s_i`, not even by one rounding step (invariant 3), and `s_i <= OS` holds exactly
-//! (invariant 1). When every `L_i` (ML) or every `L_i * P_i` (MAP) is 0, each score is
-//! exactly `OS / K` (invariant 2). The ML head uses no transcendental function; the MAP
-//! head calls `exp` only for classes whose likelihood is not 0.
+//! The normalisation first divides every mass by the largest one, `b_i = a_i / max_j a_j`
+//! (so `b_i` is in `(0, 1]`, exactly 1 for the largest), then evaluates
+//! `s_i = OS / (1 + R_i / b_i)` with `R_i = sum_{j<i} b_j + sum_{j>i} b_j`, the other
+//! classes' mass. Raising `a_i` either leaves the maximum alone (then `R_i` is
+//! unchanged and `b_i` grows) or raises it (then `b_i = 1` and every other `b_j`, so
+//! `R_i`, can only shrink); every rounded operation is monotone, so raising `L_i` can
+//! never lower `s_i`, not even by one rounding step (invariant 3), and `s_i <= OS` holds
+//! exactly (invariant 1). Equal masses all become exactly 1, `R_i = K - 1` exactly, and
+//! each score is exactly `OS / K`: in particular when every `L_i` (ML) or every
+//! `L_i * P_i` (MAP) is 0 (invariant 2), and with no special case that could disagree
+//! with the general formula by a rounding step. Nothing overflows: `b_i <= 1`,
+//! `R_i <= K - 1`. The ML head uses no transcendental function; the MAP head calls `exp`
+//! only for classes whose likelihood is not 0.
 //!
 //! The functions here work on slices, so the const-generic [`Table`](crate::Table) and
 //! the host's runtime-shaped table run the very same code.
@@ -97,10 +103,16 @@ pub(crate) fn check(
     Ok(())
 }
 
-/// Turns the unnormalised masses in `a` into scores summing to `objectness`.
-/// `suffix` is scratch space of the same length.
+/// Turns the unnormalised masses in `a` (each finite and > 0) into scores summing to
+/// `objectness`; see the module docs. `suffix` is scratch space of the same length.
 #[inline]
 fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
+    let max = a.iter().copied().fold(0.0f32, f32::max);
+    if max > 0.0 {
+        for v in a.iter_mut() {
+            *v /= max;
+        }
+    }
     let mut acc = 0.0f32;
     for (s, &v) in suffix.iter_mut().zip(a.iter()).rev() {
         *s = acc;
@@ -112,15 +124,6 @@ fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
         let rest = prefix + s;
         *v = objectness / (1.0 + rest / own);
         prefix += own;
-    }
-}
-
-/// Every score `objectness / K`: the answer when no class has any evidence.
-#[inline]
-fn uniform(out: &mut [f32], objectness: f32) {
-    let share = objectness / out.len() as f32;
-    for v in out.iter_mut() {
-        *v = share;
     }
 }
 
@@ -136,17 +139,10 @@ pub(crate) fn ml_into<F: AsRef<[f32]>>(
     suffix: &mut [f32],
 ) -> Result<(), InferError> {
     check(logits, objectness, hists.len(), out.len())?;
-    let mut evidence = false;
     for ((o, h), &x) in out.iter_mut().zip(hists).zip(logits) {
-        let l = h.likelihood(x, tail);
-        evidence |= l > 0.0;
-        *o = l + lambda;
+        *o = h.likelihood(x, tail) + lambda;
     }
-    if evidence {
-        normalise(out, suffix, objectness);
-    } else {
-        uniform(out, objectness);
-    }
+    normalise(out, suffix, objectness);
     Ok(())
 }
 
@@ -164,18 +160,12 @@ pub(crate) fn map_into<F: AsRef<[f32]>, M: Backend>(
     suffix: &mut [f32],
 ) -> Result<(), InferError> {
     check(logits, objectness, hists.len(), out.len())?;
-    let mut evidence = false;
     for (((o, h), g), &x) in out.iter_mut().zip(hists).zip(priors).zip(logits) {
         let l = h.likelihood(x, tail);
         let lp = if l > 0.0 { l * g.pdf::<M>(x) } else { 0.0 };
-        evidence |= lp > 0.0;
         *o = lp + lambda;
     }
-    if evidence {
-        normalise(out, suffix, objectness);
-    } else {
-        uniform(out, objectness);
-    }
+    normalise(out, suffix, objectness);
     Ok(())
 }
 
@@ -240,6 +230,67 @@ mod tests {
         let mut scratch = [0.0; 3];
         normalise(&mut a, &mut scratch, 0.8);
         assert_eq!(a, [0.4, 0.2, 0.2]);
+    }
+
+    /// Masses spread over the whole positive `f32` range, subnormals included.
+    fn masses() -> impl Iterator<Item = f32> {
+        (1u32..0x7f00_0000).step_by(0x00f0_0f01).map(f32::from_bits)
+    }
+
+    #[test]
+    fn equal_masses_give_exactly_os_over_k() {
+        let mut a = [0.0f32; 64];
+        let mut scratch = [0.0f32; 64];
+        for k in 2..=64 {
+            for m in masses() {
+                for os in [1.0f32, 0.93, 1e-30, 0.0] {
+                    let a = &mut a[..k];
+                    a.fill(m);
+                    normalise(a, &mut scratch[..k], os);
+                    let want = os / k as f32;
+                    assert!(
+                        a.iter().all(|s| s.to_bits() == want.to_bits()),
+                        "K {k}, mass {m:e}, OS {os}: {a:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn raising_one_mass_never_lowers_its_score() {
+        let mut scratch = [0.0f32; 11];
+        for k in [2usize, 3, 6, 7, 11] {
+            for m in masses() {
+                for i in 0..k {
+                    // From all-equal, raise mass i by one ulp, a little, and a lot; and
+                    // from a spread of masses, the same.
+                    let spread: std::vec::Vec<f32> =
+                        (0..k).map(|j| m * (1.0 + j as f32 / 3.0)).collect();
+                    for base in [std::vec![m; k], spread] {
+                        if base.iter().any(|v| !v.is_finite()) {
+                            continue;
+                        }
+                        let mut before = base.clone();
+                        normalise(&mut before, &mut scratch[..k], 1.0);
+                        for up in [base[i].next_up(), base[i] * 1.0001, base[i] * 3.0] {
+                            if !up.is_finite() {
+                                continue;
+                            }
+                            let mut after = base.clone();
+                            after[i] = up;
+                            normalise(&mut after, &mut scratch[..k], 1.0);
+                            assert!(
+                                after[i] >= before[i],
+                                "K {k}, class {i}, {base:?} -> {up:e}: {} < {}",
+                                after[i],
+                                before[i]
+                            );
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]

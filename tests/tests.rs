@@ -1,12 +1,28 @@
 //! The integration tests: one binary (`autotests = false`), one module per area.
 
-// Reading CSV files and NPY directories: valid inputs and every malformed case (DESIGN §2).
+/// Tolerances, golden files of the numpy reference, and a raw `.mlmap` writer.
+mod support;
+
+/// The layer against the numpy goldens, error cases, the batch API, ties, the exact
+/// `OS / K` answer, the embedded table, `DynTable` agreement and the fast-math bound.
+mod layer;
+
+/// The `.mlmap` format: exact round trips, the reference encoder's bytes, every
+/// corruption and truncation rejected, one error per broken invariant, size bounds.
+mod format;
+
+/// One proptest property per invariant of DESIGN §1.3, on random tables of four shapes.
+mod invariants;
+
+/// Reading CSV files and NPY directories: valid inputs and every malformed case (DESIGN §2).
 #[cfg(feature = "std")]
 mod host_data;
-// Fitting tables: golden tables from tools/, MATLAB's bin picker, floors and errors (DESIGN §1.1).
+
+/// Fitting tables: golden tables from tools/, MATLAB's bin picker, floors and errors (DESIGN §1.1).
 #[cfg(feature = "std")]
 mod host_fit;
-// Host metrics and baselines against the numpy / scikit-learn golden files written by
-// tools/metrics_reference.py.
+
+/// Host metrics and baselines against the numpy / scikit-learn golden files written by
+/// tools/metrics_reference.py.
 #[cfg(feature = "std")]
 mod metrics_golden;

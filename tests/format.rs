@@ -1,0 +1,542 @@
+//! The `.mlmap` file (DESIGN §3, docs/FORMAT.md): exact round trips, agreement with the
+//! reference encoder, and rejection of every corrupted, truncated or invalid file with
+//! the matching error.
+
+use mlmap::{DecodeError, EncodeError, Head, Table, TableError, UpperTail, MAX_LAMBDA, NAME_MAX};
+
+use crate::support::{
+    fix_crc, shipped, small, small_settings, small_specs, with_crc, RawTable, Shipped, Small,
+    SHIPPED_MLMAP, SMALL_CLAMP_MLMAP, SMALL_MLMAP,
+};
+
+fn encode<const K: usize, const BM: usize, const BP: usize>(t: &Table<K, BM, BP>) -> Vec<u8> {
+    let mut buf = vec![0u8; Table::<K, BM, BP>::MAX_ENCODED_LEN];
+    let len = t
+        .to_slice(&mut buf)
+        .expect("MAX_ENCODED_LEN suffices")
+        .len();
+    buf.truncate(len);
+    buf
+}
+
+#[test]
+fn round_trip_is_exact() {
+    for bytes in [SHIPPED_MLMAP, &mlmap::embedded::BYTES[..]] {
+        let t = Shipped::from_bytes(bytes).unwrap();
+        let again = encode(&t);
+        assert_eq!(again, bytes, "re-encoding is byte-identical");
+        assert_eq!(Shipped::from_bytes(&again).unwrap(), t);
+    }
+    for bytes in [SMALL_MLMAP, SMALL_CLAMP_MLMAP] {
+        let t = Small::from_bytes(bytes).unwrap();
+        assert_eq!(encode(&t), bytes);
+        assert_eq!(Small::from_bytes(&encode(&t)).unwrap(), t);
+    }
+    // Extreme but valid values survive bit for bit: subnormal and huge frequencies'
+    // neighbours, the largest lambda, the variance floor, u64::MAX rows, long names.
+    let mut specs = small_specs();
+    specs[0].rows = u64::MAX;
+    specs[0].name = "a-class-name-of-31-bytes-long!!";
+    specs[1].ml_freqs = [f32::from_bits(1), 0.5, 0.5 - f32::from_bits(1), 0.0];
+    specs[1].variance = mlmap::VARIANCE_FLOOR as f32;
+    specs[2].mean = -3e38;
+    specs[2].ml_range = (-1e-30, 1e-30);
+    let mut settings = small_settings(UpperTail::Clamp);
+    settings.lambda_ml = MAX_LAMBDA;
+    settings.lambda_map = f32::from_bits(1);
+    settings.edge_mode = mlmap::EdgeMode::Matlab;
+    let t = Small::from_parts(settings, specs).unwrap();
+    let bytes = encode(&t);
+    let back = Small::from_bytes(&bytes).unwrap();
+    assert_eq!(back, t);
+    assert_eq!(encode(&back), bytes);
+    assert_eq!(back.rows(0), Some(u64::MAX));
+    assert_eq!(back.settings().lambda_map.to_bits(), 1);
+}
+
+/// The library's encoder, the reference encoder (`tools/mlmap_ref.py`) and the test's
+/// own raw writer produce the same bytes for the hand-checkable table.
+#[test]
+fn small_table_bytes_equal_the_reference_encoder() {
+    let t = Small::from_parts(small_settings(UpperTail::Zero), small_specs()).unwrap();
+    assert_eq!(encode(&t), SMALL_MLMAP);
+    let clamp = Small::from_parts(small_settings(UpperTail::Clamp), small_specs()).unwrap();
+    assert_eq!(encode(&clamp), SMALL_CLAMP_MLMAP);
+    assert_eq!(RawTable::small().encode(), SMALL_MLMAP);
+    // Decoding the reference's file gives the very table built from parts.
+    assert_eq!(small(), t);
+    // The files differ only in the tail policy byte (and so in the CRC).
+    let differing: Vec<usize> = (0..SMALL_MLMAP.len())
+        .filter(|&i| SMALL_MLMAP[i] != SMALL_CLAMP_MLMAP[i])
+        .collect();
+    let tail_byte = 4 + 4 + 1; // magic, four one-byte varints, edge mode
+    assert_eq!(differing[0], tail_byte);
+    assert!(differing[1..].iter().all(|&i| i >= SMALL_MLMAP.len() - 4));
+}
+
+/// CRC-32 detects every error burst of up to 32 bits, so every single-byte change of a
+/// table is rejected: in the magic as `NotATable`, anywhere else as `Corrupted`.
+fn assert_every_byte_corruption_rejected<const K: usize, const BM: usize, const BP: usize>(
+    bytes: &[u8],
+    masks: impl Iterator<Item = u8> + Clone,
+) -> usize {
+    let mut buf = bytes.to_vec();
+    let mut n = 0;
+    for pos in 0..bytes.len() {
+        for mask in masks.clone() {
+            buf[pos] ^= mask;
+            let got = Table::<K, BM, BP>::from_bytes(&buf);
+            let want = if pos < 4 {
+                DecodeError::NotATable
+            } else {
+                DecodeError::Corrupted
+            };
+            assert_eq!(got.err(), Some(want), "byte {pos} ^ {mask:#04x}");
+            #[cfg(feature = "std")]
+            assert_eq!(
+                mlmap::host::DynTable::from_bytes(&buf).err(),
+                Some(want),
+                "DynTable: byte {pos} ^ {mask:#04x}"
+            );
+            buf[pos] ^= mask;
+            n += 1;
+        }
+    }
+    assert_eq!(buf, bytes);
+    n
+}
+
+#[test]
+fn every_single_byte_corruption_is_rejected() {
+    let n = assert_every_byte_corruption_rejected::<3, 4, 2>(SMALL_MLMAP, 1..=255u8);
+    assert_eq!(n, SMALL_MLMAP.len() * 255);
+    let n = assert_every_byte_corruption_rejected::<3, 22, 17>(SHIPPED_MLMAP, 1..=255u8);
+    assert_eq!(n, SHIPPED_MLMAP.len() * 255);
+}
+
+#[test]
+fn truncation_at_every_length_is_rejected() {
+    for bytes in [SMALL_MLMAP, SHIPPED_MLMAP] {
+        for len in 0..bytes.len() {
+            let got = Shipped::from_bytes(&bytes[..len]).err();
+            let got_small = Small::from_bytes(&bytes[..len]).err();
+            for got in [got, got_small] {
+                match got {
+                    Some(DecodeError::Truncated | DecodeError::Corrupted) => {}
+                    other => panic!("{len} bytes: {other:?}"),
+                }
+            }
+            if len < 4 {
+                // A prefix of the magic is not a different file, only a short one.
+                assert_eq!(got_small, Some(DecodeError::Truncated), "{len} bytes");
+            }
+        }
+        // Cut short and given a valid checksum again: the body no longer parses.
+        for len in 4..bytes.len() - 4 {
+            let cut = with_crc(&bytes[..len]);
+            let got = Small::from_bytes(&cut).err();
+            assert!(
+                matches!(
+                    got,
+                    Some(
+                        DecodeError::Truncated
+                            | DecodeError::Malformed
+                            | DecodeError::ShapeMismatch { .. }
+                    )
+                ),
+                "{len} bytes + CRC: {got:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn wrong_shape_is_a_shape_mismatch() {
+    assert_eq!(
+        Table::<3, 4, 3>::from_bytes(SMALL_MLMAP),
+        Err(DecodeError::ShapeMismatch {
+            expected: (3, 4, 3),
+            found: (3, 4, 2)
+        })
+    );
+    assert_eq!(
+        Table::<2, 4, 2>::from_bytes(SMALL_MLMAP),
+        Err(DecodeError::ShapeMismatch {
+            expected: (2, 4, 2),
+            found: (3, 4, 2)
+        })
+    );
+    assert_eq!(
+        Table::<3, 22, 17>::from_bytes(SMALL_MLMAP),
+        Err(DecodeError::ShapeMismatch {
+            expected: (3, 22, 17),
+            found: (3, 4, 2)
+        })
+    );
+    assert_eq!(
+        Table::<3, 17, 22>::from_bytes(SHIPPED_MLMAP),
+        Err(DecodeError::ShapeMismatch {
+            expected: (3, 17, 22),
+            found: (3, 22, 17)
+        })
+    );
+    // A header that disagrees with its own body: K = 2 declared, 3 classes follow.
+    let mut raw = RawTable::small();
+    raw.k = 2;
+    assert_eq!(
+        Table::<2, 4, 2>::from_bytes(&raw.encode()),
+        Err(DecodeError::Malformed)
+    );
+    // K = 3 declared, 2 classes follow.
+    let mut raw = RawTable::small();
+    raw.class_count = 2;
+    raw.classes.pop();
+    assert_eq!(
+        Small::from_bytes(&raw.encode()),
+        Err(DecodeError::Malformed)
+    );
+}
+
+#[test]
+fn wrong_magic_is_not_a_table() {
+    for magic in [*b"MLMQ", *b"mlmp", *b"\x89PNG", [0; 4], *b"PMLM"] {
+        let mut raw = RawTable::small();
+        raw.magic = magic;
+        assert_eq!(
+            Small::from_bytes(&raw.encode()),
+            Err(DecodeError::NotATable),
+            "{magic:?}"
+        );
+    }
+    assert_eq!(Small::from_bytes(b"GIF89a"), Err(DecodeError::NotATable));
+    assert_eq!(Small::from_bytes(b"X"), Err(DecodeError::NotATable));
+    assert_eq!(Small::from_bytes(b""), Err(DecodeError::Truncated));
+    assert_eq!(Small::from_bytes(b"MLMP"), Err(DecodeError::Truncated));
+}
+
+#[test]
+fn other_versions_are_unsupported() {
+    for version in [0u64, 2, 3, 127, 300, u64::from(u16::MAX)] {
+        let mut raw = RawTable::small();
+        raw.version = version;
+        assert_eq!(
+            Small::from_bytes(&raw.encode()),
+            Err(DecodeError::UnsupportedVersion {
+                found: version as u16
+            }),
+            "version {version}"
+        );
+    }
+    // A version that does not even fit the field.
+    let mut raw = RawTable::small();
+    raw.version = 1 << 16;
+    assert_eq!(
+        Small::from_bytes(&raw.encode()),
+        Err(DecodeError::Malformed)
+    );
+}
+
+#[test]
+fn trailing_bytes_are_rejected() {
+    // Inside the checksummed part: the body has bytes left over.
+    for extra in [&[0u8][..], &[1, 2, 3], &[0; 64]] {
+        let mut raw = RawTable::small();
+        raw.trailing = extra.to_vec();
+        assert_eq!(
+            Small::from_bytes(&raw.encode()),
+            Err(DecodeError::Malformed)
+        );
+    }
+    // After the checksum: the last four bytes are no longer the checksum.
+    for extra in [&[0u8][..], &[0; 4], &SMALL_MLMAP[SMALL_MLMAP.len() - 4..]] {
+        let mut bytes = SMALL_MLMAP.to_vec();
+        bytes.extend_from_slice(extra);
+        assert_eq!(Small::from_bytes(&bytes), Err(DecodeError::Corrupted));
+    }
+    // Two tables back to back.
+    let twice = [SMALL_MLMAP, SMALL_MLMAP].concat();
+    assert_eq!(Small::from_bytes(&twice), Err(DecodeError::Corrupted));
+}
+
+/// Breaks one field of the small table (keeping the CRC right) and expects `want`.
+fn assert_broken(what: &str, change: impl FnOnce(&mut RawTable), want: DecodeError) {
+    let mut raw = RawTable::small();
+    change(&mut raw);
+    let bytes = raw.encode();
+    assert_eq!(Small::from_bytes(&bytes), Err(want), "{what}");
+    #[cfg(feature = "std")]
+    {
+        // The host decoder agrees on every invariant (it has no shape to mismatch).
+        let dyn_got = mlmap::host::DynTable::from_bytes(&bytes).err();
+        if matches!(want, DecodeError::Invalid(TableError::BinCount { .. })) {
+            assert!(dyn_got.is_some(), "DynTable: {what}");
+        } else {
+            assert_eq!(dyn_got, Some(want), "DynTable: {what}");
+        }
+    }
+}
+
+#[test]
+fn each_broken_invariant_has_its_error() {
+    use DecodeError::Invalid;
+    use TableError::*;
+    let bad_edges: [(f32, f32); 7] = [
+        (1.0, 1.0),
+        (2.0, 1.0),
+        (f32::NAN, 1.0),
+        (0.0, f32::NAN),
+        (f32::NEG_INFINITY, 1.0),
+        (0.0, f32::INFINITY),
+        // One ulp apart: the inner edges (w below one ulp) collapse onto lo or hi.
+        (1e6, 1e6f32.next_up()),
+    ];
+    for class in 0..3u16 {
+        let c = usize::from(class);
+        for (lo, hi) in bad_edges {
+            assert_broken(
+                &format!("ML edges {lo} {hi} of class {class}"),
+                |r| (r.classes[c].ml_lo, r.classes[c].ml_hi) = (lo, hi),
+                Invalid(Edges {
+                    head: Head::Ml,
+                    class,
+                }),
+            );
+            assert_broken(
+                &format!("MAP edges {lo} {hi} of class {class}"),
+                |r| (r.classes[c].map_lo, r.classes[c].map_hi) = (lo, hi),
+                Invalid(Edges {
+                    head: Head::Map,
+                    class,
+                }),
+            );
+        }
+        let bad_ml_freqs: [[f32; 4]; 6] = [
+            [0.1, 0.2, 0.3, 0.3],           // sums to 0.9
+            [0.1, 0.2, 0.3, 0.4002],        // 1.0002: outside 1 +- 1e-4
+            [-0.1, 0.3, 0.4, 0.4],          // negative
+            [f32::NAN, 0.2, 0.4, 0.4],      // NaN
+            [f32::INFINITY, 0.0, 0.0, 0.0], // infinite
+            [0.0, 0.0, 0.0, 0.0],           // nothing
+        ];
+        for freqs in bad_ml_freqs {
+            assert_broken(
+                &format!("ML frequencies {freqs:?} of class {class}"),
+                |r| r.classes[c].ml_freqs = freqs.to_vec(),
+                Invalid(Frequencies {
+                    head: Head::Ml,
+                    class,
+                }),
+            );
+        }
+        for freqs in [[0.5f32, 0.4], [1.5, -0.5], [f32::NAN, 1.0], [-0.0, 0.9]] {
+            assert_broken(
+                &format!("MAP frequencies {freqs:?} of class {class}"),
+                |r| r.classes[c].map_freqs = freqs.to_vec(),
+                Invalid(Frequencies {
+                    head: Head::Map,
+                    class,
+                }),
+            );
+        }
+        // One frequency short of the declared bin count.
+        assert_broken(
+            &format!("3 ML frequencies in class {class}"),
+            |r| r.classes[c].ml_freqs = vec![0.25, 0.25, 0.5],
+            Invalid(BinCount {
+                head: Head::Ml,
+                class,
+            }),
+        );
+        assert_broken(
+            &format!("1 MAP frequency in class {class}"),
+            |r| r.classes[c].map_freqs = vec![1.0],
+            Invalid(BinCount {
+                head: Head::Map,
+                class,
+            }),
+        );
+        for mean in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert_broken(
+                &format!("mean {mean} of class {class}"),
+                |r| r.classes[c].mean = mean,
+                Invalid(Mean { class }),
+            );
+        }
+        for var in [
+            0.0,
+            -0.0,
+            -1.0,
+            f32::NAN,
+            f32::INFINITY,
+            1e-40,
+            f32::from_bits(1),
+        ] {
+            assert_broken(
+                &format!("variance {var} of class {class}"),
+                |r| r.classes[c].variance = var,
+                Invalid(Variance { class }),
+            );
+        }
+        let long = vec![b'x'; NAME_MAX + 1];
+        for name in [&b""[..], b"background", &long] {
+            assert_broken(
+                &format!("name {:?} of class {class}", String::from_utf8_lossy(name)),
+                |r| r.classes[c].name = name.to_vec(),
+                Invalid(Name { class }),
+            );
+        }
+        // Not UTF-8: the body does not follow the format.
+        assert_broken(
+            &format!("non-UTF-8 name of class {class}"),
+            |r| r.classes[c].name = vec![0xff, 0xfe],
+            DecodeError::Malformed,
+        );
+    }
+    for lambda in [
+        0.0,
+        -0.0,
+        -1e-3,
+        f32::NAN,
+        f32::INFINITY,
+        MAX_LAMBDA.next_up(),
+        1e7,
+    ] {
+        assert_broken(
+            &format!("ML lambda {lambda}"),
+            |r| r.lambda_ml = lambda,
+            Invalid(Lambda { head: Head::Ml }),
+        );
+        assert_broken(
+            &format!("MAP lambda {lambda}"),
+            |r| r.lambda_map = lambda,
+            Invalid(Lambda { head: Head::Map }),
+        );
+    }
+    assert_broken(
+        "third name repeats the first",
+        |r| r.classes[2].name = b"car".to_vec(),
+        Invalid(DuplicateName { class: 2 }),
+    );
+    assert_broken(
+        "second name repeats the first",
+        |r| r.classes[1].name = b"car".to_vec(),
+        Invalid(DuplicateName { class: 1 }),
+    );
+    for tag in [2u8, 255] {
+        assert_broken(
+            "edge mode tag",
+            |r| r.edge_mode = tag,
+            DecodeError::Malformed,
+        );
+        assert_broken("tail tag", |r| r.upper_tail = tag, DecodeError::Malformed);
+    }
+    // The largest valid values are accepted: the broken cases above are not rejected
+    // for some unrelated reason.
+    let mut raw = RawTable::small();
+    raw.lambda_ml = MAX_LAMBDA;
+    raw.classes[0].name = vec![b'x'; NAME_MAX];
+    raw.classes[0].rows = u64::MAX;
+    raw.classes[1].ml_freqs = vec![0.1, 0.2, 0.3, 0.40009];
+    raw.edge_mode = 1;
+    raw.upper_tail = 1;
+    let t = Small::from_bytes(&raw.encode()).unwrap();
+    assert_eq!(t.class_name(0).map(str::len), Some(NAME_MAX));
+}
+
+/// `ClassCount` is the host decoder's: a fixed-size table has its K in its type.
+#[cfg(feature = "std")]
+#[test]
+fn one_class_is_too_few() {
+    let mut raw = RawTable::small();
+    raw.k = 1;
+    raw.class_count = 1;
+    raw.classes.truncate(1);
+    assert_eq!(
+        mlmap::host::DynTable::from_bytes(&raw.encode()),
+        Err(DecodeError::Invalid(TableError::ClassCount))
+    );
+}
+
+/// A valid table of shape `K, BM, BP` with the longest names and row counts.
+fn worst_case<const K: usize, const BM: usize, const BP: usize>() -> Table<K, BM, BP> {
+    let names: Vec<String> = (0..K)
+        .map(|i| format!("{i:0>width$}", width = NAME_MAX))
+        .collect();
+    let classes = std::array::from_fn(|i| mlmap::ClassSpec {
+        name: names[i].as_str(),
+        rows: u64::MAX,
+        mean: -1.234_567_8e-20,
+        variance: 1e30,
+        ml_range: (-3.0e30, 3.0e30),
+        ml_freqs: [1.0 / BM as f32; BM],
+        map_range: (f32::MIN_POSITIVE, 1.0),
+        map_freqs: [1.0 / BP as f32; BP],
+    });
+    Table::from_parts(small_settings(UpperTail::Clamp), classes).expect("a valid worst case")
+}
+
+fn assert_max_len_bounds<const K: usize, const BM: usize, const BP: usize>() -> usize {
+    let t = worst_case::<K, BM, BP>();
+    let max = Table::<K, BM, BP>::MAX_ENCODED_LEN;
+    assert_eq!(max, mlmap::max_encoded_len(K, BM, BP));
+    let mut buf = vec![0u8; max];
+    let len = t
+        .to_slice(&mut buf)
+        .expect("MAX_ENCODED_LEN suffices")
+        .len();
+    assert!(len <= max);
+    // Exactly `len` bytes suffice, and no shorter buffer does (every length for small
+    // tables; a spread of lengths for big ones, the check being quadratic).
+    let exact = encode(&t);
+    assert_eq!(exact.len(), len);
+    let step = (len / 500).max(1);
+    for short in (0..len).step_by(step).chain([len - 1]) {
+        assert_eq!(
+            t.to_slice(&mut buf[..short]).err(),
+            Some(EncodeError::BufferTooSmall),
+            "{short} bytes"
+        );
+    }
+    assert_eq!(Table::<K, BM, BP>::from_bytes(&exact), Ok(t));
+    // The bound is not loose: only the header's varints can be shorter than assumed.
+    assert!(
+        max - len <= 16,
+        "{K}x{BM}x{BP}: max {max}, worst case {len}"
+    );
+    len
+}
+
+#[test]
+fn max_encoded_len_bounds_the_worst_case() {
+    assert_max_len_bounds::<3, 22, 17>();
+    assert_max_len_bounds::<2, 1, 1>();
+    assert_max_len_bounds::<5, 7, 30>();
+    assert_max_len_bounds::<2, 200, 130>(); // two-byte bin counts
+    assert_max_len_bounds::<130, 2, 2>(); // a two-byte class count
+}
+
+#[test]
+fn shipped_table_size() {
+    let t = shipped();
+    let len = encode(&t).len();
+    eprintln!(
+        "tables/default.mlmap (K = 3, 22 / 17 bins): {len} bytes encoded, MAX_ENCODED_LEN = {}",
+        Shipped::MAX_ENCODED_LEN
+    );
+    assert_eq!(len, SHIPPED_MLMAP.len());
+    assert!((500..=700).contains(&len), "{len} bytes");
+    assert!(len <= Shipped::MAX_ENCODED_LEN);
+    // A static buffer can be sized at compile time.
+    static BUF: [u8; Shipped::MAX_ENCODED_LEN] = [0; Shipped::MAX_ENCODED_LEN];
+    assert!(BUF.len() >= len);
+}
+
+#[test]
+fn crc_can_be_recomputed_by_the_tests() {
+    // The helpers the other tests rely on: a fixed CRC makes the original valid again.
+    assert_eq!(fix_crc(SMALL_MLMAP), SMALL_MLMAP);
+    let mut bytes = SMALL_MLMAP.to_vec();
+    *bytes.last_mut().unwrap() ^= 1;
+    assert_eq!(Small::from_bytes(&bytes), Err(DecodeError::Corrupted));
+    assert_eq!(Small::from_bytes(&fix_crc(&bytes)), Ok(small()));
+}

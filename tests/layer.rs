@@ -1,0 +1,770 @@
+//! The layer against the numpy reference, its error cases, the batch API and the exact
+//! "I don't know" answer (DESIGN §1.2, §1.3; issue 2 items 1, 2, 5, 7).
+
+use mlmap::{BatchError, InferError, Scores, Table, UpperTail};
+
+use crate::support::{
+    goldens, shipped, small, small_clamp, small_settings, small_specs, Golden, Shipped, Small,
+    GOLDEN_ABS_TOL, SHIPPED_CSV, SMALL_CSV,
+};
+
+/// Checks one golden row against `table`; returns the largest score error seen.
+fn check_golden<const BM: usize, const BP: usize>(table: &Table<3, BM, BP>, g: &Golden) -> f64 {
+    let what = format!(
+        "{} / {} / logits {:?} / objectness {}",
+        g.table, g.case, g.logits, g.objectness
+    );
+    let ml = table.ml(&g.logits, g.objectness);
+    let map = table.map(&g.logits, g.objectness);
+    let (Some(want_ml), Some(want_map)) = (g.ml, g.map) else {
+        let want = g.error.expect("a golden row holds scores or an error");
+        assert_eq!(ml, Err(want), "ML: {what}");
+        assert_eq!(map, Err(want), "MAP: {what}");
+        return 0.0;
+    };
+    let mut worst = 0.0f64;
+    for (head, got, want) in [("ML", ml, want_ml), ("MAP", map, want_map)] {
+        let got = got.unwrap_or_else(|e| panic!("{head}: {what}: unexpected {e:?}"));
+        for (i, (&s, &w)) in got.0.iter().zip(&want).enumerate() {
+            let err = (f64::from(s) - w).abs();
+            assert!(
+                err <= GOLDEN_ABS_TOL,
+                "{head} score {i}: {what}: got {s}, want {w} (error {err:e} > {GOLDEN_ABS_TOL:e})"
+            );
+            worst = worst.max(err);
+        }
+    }
+    worst
+}
+
+#[test]
+fn small_tables_match_the_numpy_reference() {
+    let (plain, clamp) = (small(), small_clamp());
+    let mut worst = 0.0f64;
+    let rows = goldens(SMALL_CSV);
+    for g in &rows {
+        let table = match g.table.as_str() {
+            "small" => &plain,
+            "small_clamp" => &clamp,
+            other => panic!("unknown golden table {other}"),
+        };
+        worst = worst.max(check_golden(table, g));
+    }
+    // Both tables, every case, including the error cases.
+    assert!(rows.iter().any(|g| g.error.is_some()));
+    assert!(rows.iter().any(|g| g.table == "small_clamp"));
+    eprintln!(
+        "small tables: {} golden rows, worst score error {worst:e}",
+        rows.len()
+    );
+}
+
+#[test]
+fn shipped_table_matches_the_numpy_reference() {
+    let decoded = shipped();
+    let rows = goldens(SHIPPED_CSV);
+    assert!(rows.len() >= 300);
+    let mut worst = 0.0f64;
+    for g in &rows {
+        assert_eq!(g.table, "default");
+        worst = worst.max(check_golden(&decoded, g));
+        // The table embedded at build time gives the very same bits.
+        let embedded = &mlmap::embedded::TABLE;
+        if g.error.is_none() {
+            assert_eq!(
+                embedded.ml(&g.logits, g.objectness),
+                decoded.ml(&g.logits, g.objectness)
+            );
+            assert_eq!(
+                embedded.map(&g.logits, g.objectness),
+                decoded.map(&g.logits, g.objectness)
+            );
+        }
+    }
+    eprintln!(
+        "shipped table: {} golden rows, worst score error {worst:e}",
+        rows.len()
+    );
+}
+
+/// Hand-computed values of the small table, independent of every script: a reader can
+/// check them with pencil and paper.
+#[test]
+fn small_table_by_hand() {
+    let t = small();
+    // car 0.5 -> bin 0 (0.1); cyclist 0.5 -> bin [0, 1) (0.2); pedestrian 0.5 > 0: no
+    // likelihood. a = (0.11, 0.21, 0.01), sum 0.33.
+    let s = t.ml(&[0.5, 0.5, 0.5], 1.0).unwrap();
+    let want = [0.11 / 0.33, 0.21 / 0.33, 0.01 / 0.33];
+    for (g, w) in s.0.iter().zip(want) {
+        assert!((f64::from(*g) - w).abs() < 1e-6, "{s:?} vs {want:?}");
+    }
+    // On inner edges: car 1.0 opens bin 1 (0.2), cyclist 0.0 opens bin 2 (0.2),
+    // pedestrian -2.0 opens bin 2 (0.25). a = (0.21, 0.21, 0.26), sum 0.68.
+    let s = t.ml(&[1.0, 0.0, -2.0], 1.0).unwrap();
+    assert_eq!(s.0[0], s.0[1], "equal likelihoods give equal scores");
+    assert!((f64::from(s.0[2]) - 0.26 / 0.68).abs() < 1e-6, "{s:?}");
+    // On the closed last edges: car 4 -> 0.4, cyclist 2 -> 0.1, pedestrian 0 -> 0.25.
+    let s = t.ml(&[4.0, 2.0, 0.0], 1.0).unwrap();
+    assert!((f64::from(s.0[0]) - 0.41 / 0.78).abs() < 1e-6, "{s:?}");
+    // One ulp above them: nothing (zero tail), or the last bins again (clamp).
+    let above = [4.0f32.next_up(), 2.0f32.next_up(), 0.0f32.next_up()];
+    assert_eq!(t.ml(&above, 1.0).unwrap().0, [1.0 / 3.0; 3]);
+    assert_eq!(
+        small_clamp().ml(&above, 1.0).unwrap(),
+        small_clamp().ml(&[4.0, 2.0, 0.0], 1.0).unwrap()
+    );
+}
+
+#[test]
+fn error_cases() {
+    let t = shipped();
+    let nan_payloads = [
+        f32::NAN,
+        -f32::NAN,
+        f32::from_bits(0x7fc0_0001),
+        f32::from_bits(0x7f80_0001), // signalling
+        f32::from_bits(0xffff_ffff),
+    ];
+    for nan in nan_payloads {
+        for class in 0..3u16 {
+            let mut x = [1.0f32, -2.0, 0.5];
+            x[usize::from(class)] = nan;
+            let want = Err(InferError::NanLogit { class });
+            assert_eq!(t.ml(&x, 0.5), want, "{x:?}");
+            assert_eq!(t.map(&x, 0.5), want, "{x:?}");
+        }
+        // The first NaN is reported.
+        let want = Err(InferError::NanLogit { class: 1 });
+        assert_eq!(t.ml(&[0.0, nan, nan], 1.0), want);
+        assert_eq!(t.map(&[0.0, nan, nan], 1.0), want);
+    }
+    let bad_objectness = [
+        f32::NAN,
+        -f32::NAN,
+        -0.1,
+        1.1,
+        1.0f32.next_up(),
+        -f32::from_bits(1),
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::MAX,
+    ];
+    for os in bad_objectness {
+        assert_eq!(
+            t.ml(&[1.0, -2.0, 0.5], os),
+            Err(InferError::Objectness),
+            "{os}"
+        );
+        assert_eq!(
+            t.map(&[1.0, -2.0, 0.5], os),
+            Err(InferError::Objectness),
+            "{os}"
+        );
+    }
+    // Both wrong: an error either way, never scores.
+    assert!(t.ml(&[f32::NAN; 3], f32::NAN).is_err());
+    assert!(t.map(&[f32::NAN; 3], 2.0).is_err());
+    // The edges of [0, 1] themselves are valid, -0.0 included.
+    for os in [0.0, -0.0, 1.0, f32::from_bits(1), 1.0f32.next_down()] {
+        assert!(t.ml(&[1.0, -2.0, 0.5], os).is_ok(), "{os}");
+        assert!(t.map(&[1.0, -2.0, 0.5], os).is_ok(), "{os}");
+    }
+}
+
+/// Logit rows for the batch tests: valid, valid, NaN, valid.
+fn batch_rows() -> [[f32; 3]; 4] {
+    [
+        [3.0, -2.0, -1.0],
+        [0.5, 0.5, f32::INFINITY],
+        [0.5, f32::NAN, 0.5],
+        [-1.0, 2.0, 0.0],
+    ]
+}
+
+const SENTINEL: [f32; 3] = [-7.0; 3];
+
+#[test]
+fn batch_matches_single_calls() {
+    let t = shipped();
+    let rows = [
+        [3.0, -2.0, -1.0],
+        [0.5, 0.5, f32::INFINITY],
+        [-1.0, 2.0, 0.0],
+    ];
+    let os = [0.9, 0.0, 1.0];
+    let mut ml = [SENTINEL; 3];
+    let mut map = [SENTINEL; 3];
+    t.ml_batch(&rows, Some(&os), &mut ml).unwrap();
+    t.map_batch(&rows, Some(&os), &mut map).unwrap();
+    for r in 0..3 {
+        assert_eq!(ml[r], t.ml(&rows[r], os[r]).unwrap().0, "row {r}");
+        assert_eq!(map[r], t.map(&rows[r], os[r]).unwrap().0, "row {r}");
+    }
+    // No objectness: 1.0 for every row.
+    t.ml_batch(&rows, None, &mut ml).unwrap();
+    t.map_batch(&rows, None, &mut map).unwrap();
+    for r in 0..3 {
+        assert_eq!(ml[r], t.ml(&rows[r], 1.0).unwrap().0, "row {r}");
+        assert_eq!(map[r], t.map(&rows[r], 1.0).unwrap().0, "row {r}");
+    }
+    // Empty batches are fine.
+    t.ml_batch(&[], None, &mut []).unwrap();
+    t.map_batch(&[], Some(&[]), &mut []).unwrap();
+}
+
+#[test]
+fn batch_row_error_writes_earlier_rows_only() {
+    let t = shipped();
+    let rows = batch_rows();
+    type Run = fn(&Shipped, &[[f32; 3]], Option<&[f32]>, &mut [[f32; 3]]) -> Result<(), BatchError>;
+    let heads: [(&str, Run); 2] = [
+        ("ML", |t, x, o, out| t.ml_batch(x, o, out)),
+        ("MAP", |t, x, o, out| t.map_batch(x, o, out)),
+    ];
+    for (head, run) in heads {
+        let mut out = [SENTINEL; 4];
+        assert_eq!(
+            run(&t, &rows, None, &mut out),
+            Err(BatchError::Row {
+                index: 2,
+                error: InferError::NanLogit { class: 1 }
+            }),
+            "{head}"
+        );
+        let single = |x: &[f32; 3], os| match head {
+            "ML" => t.ml(x, os).unwrap().0,
+            _ => t.map(x, os).unwrap().0,
+        };
+        assert_eq!(out[0], single(&rows[0], 1.0), "{head}");
+        assert_eq!(out[1], single(&rows[1], 1.0), "{head}");
+        assert_eq!(out[2], SENTINEL, "{head}: the bad row is untouched");
+        assert_eq!(out[3], SENTINEL, "{head}: rows after it are untouched");
+
+        // A bad objectness in row 1 of otherwise valid rows.
+        let valid = [rows[0], rows[1], rows[3]];
+        let mut out = [SENTINEL; 3];
+        assert_eq!(
+            run(&t, &valid, Some(&[0.5, 1.5, 0.5]), &mut out),
+            Err(BatchError::Row {
+                index: 1,
+                error: InferError::Objectness
+            }),
+            "{head}"
+        );
+        assert_eq!(out[0], single(&valid[0], 0.5), "{head}");
+        assert_eq!(out[1..], [SENTINEL; 2], "{head}");
+
+        // Resuming after the bad row, as the docs suggest, scores the rest.
+        let mut rest = [SENTINEL; 1];
+        run(&t, &rows[3..], None, &mut rest).unwrap();
+        assert_eq!(rest[0], single(&rows[3], 1.0), "{head}");
+    }
+}
+
+#[test]
+fn batch_length_mismatch_writes_nothing() {
+    let t = shipped();
+    let rows = [[3.0, -2.0, -1.0], [0.5, 0.5, 0.5]];
+    let cases: [(usize, Option<&[f32]>); 4] = [
+        (1, None),
+        (3, None),
+        (2, Some(&[1.0])),
+        (2, Some(&[1.0, 1.0, 1.0])),
+    ];
+    for (out_len, os) in cases {
+        let mut out = vec![SENTINEL; out_len];
+        assert_eq!(
+            t.ml_batch(&rows, os, &mut out),
+            Err(BatchError::LengthMismatch)
+        );
+        assert_eq!(
+            t.map_batch(&rows, os, &mut out),
+            Err(BatchError::LengthMismatch)
+        );
+        assert!(out.iter().all(|r| *r == SENTINEL), "{out_len} {os:?}");
+    }
+    // The length check comes before any row check: a NaN row changes nothing.
+    let mut out = [SENTINEL; 1];
+    assert_eq!(
+        t.ml_batch(&[[f32::NAN; 3], [0.0; 3]], None, &mut out),
+        Err(BatchError::LengthMismatch)
+    );
+    assert_eq!(out, [SENTINEL]);
+}
+
+#[test]
+fn argmax_takes_the_lowest_index_on_ties() {
+    assert_eq!(Scores([0.2f32, 0.4, 0.4]).argmax(), 1);
+    assert_eq!(Scores([0.5f32, 0.1, 0.5]).argmax(), 0);
+    assert_eq!(Scores([0.1f32, 0.3, 0.3, 0.3]).argmax(), 1);
+    assert_eq!(Scores([0.0f32; 5]).argmax(), 0);
+    assert_eq!(Scores([-0.0f32, 0.0]).argmax(), 0, "-0 and 0 tie");
+    assert_eq!(Scores([0.1f32, 0.2, 0.7]).argmax(), 2);
+    assert_eq!(Scores([0.25f32, 0.25, 0.5]).confidence(), 0.5);
+    // The layer's own ties: "I don't know" is a K-way tie, decided for class 0.
+    let t = shipped();
+    let unknown = t.ml(&[1e30, -1e30, f32::INFINITY], 0.9).unwrap();
+    assert_eq!(unknown.argmax(), 0);
+    // Objectness 0 makes every score 0: also class 0.
+    assert_eq!(t.map(&[5.0, -2.0, -1.0], 0.0).unwrap().argmax(), 0);
+    // Two classes with identical statistics and logits tie at a non-trivial value.
+    let mut specs = small_specs();
+    specs[2] = specs[0].clone();
+    specs[2].name = "van";
+    let twins = Small::from_parts(small_settings(UpperTail::Zero), specs).unwrap();
+    for head in [
+        twins.ml(&[2.5, -5.0, 2.5], 1.0).unwrap(),
+        twins.map(&[2.5, -5.0, 2.5], 1.0).unwrap(),
+    ] {
+        assert!(head.0[0] > 1.0 / 3.0);
+        assert_eq!(head.0[0].to_bits(), head.0[2].to_bits());
+        assert_eq!(head.argmax(), 0, "{head:?}");
+    }
+}
+
+/// Objectness values for the exactness tests: the ends, tiny, awkward and a sweep.
+fn objectness_values() -> Vec<f32> {
+    let mut v = vec![
+        0.0,
+        -0.0,
+        1.0,
+        f32::from_bits(1),
+        f32::MIN_POSITIVE,
+        1e-30,
+        0.1,
+        1.0 / 3.0,
+        0.5,
+        0.93,
+        1.0f32.next_down(),
+    ];
+    v.extend((0..=1000).map(|i| i as f32 / 1000.0));
+    v.extend((0..200).map(|i| 0.7 + i as f32 * 1.3e-3));
+    v
+}
+
+/// DESIGN §1.3 invariant 2: logits outside every class's support give exactly
+/// `OS / K`, bit for bit, under both heads.
+#[test]
+fn out_of_support_is_exactly_os_over_k() {
+    let shipped = shipped();
+    let (small, small_clamp) = (small(), small_clamp());
+    let inf = f32::INFINITY;
+    let outside_shipped: Vec<[f32; 3]> = {
+        let mut v = vec![
+            [inf, -inf, inf],
+            [-inf; 3],
+            [1e30, -1e30, 3e38],
+            [f32::MAX, f32::MIN, f32::MAX],
+        ];
+        // Just outside each class's widest support, below and above.
+        let below: [f32; 3] = std::array::from_fn(|i| {
+            let lo = shipped.ml_histogram(i).unwrap().lo();
+            lo.min(shipped.map_histogram(i).unwrap().lo()).next_down()
+        });
+        let above: [f32; 3] = std::array::from_fn(|i| {
+            let hi = shipped.ml_histogram(i).unwrap().hi();
+            hi.max(shipped.map_histogram(i).unwrap().hi()).next_up()
+        });
+        v.push(below);
+        v.push(above);
+        v.push([below[0], above[1], below[2]]);
+        v
+    };
+    // Zero tail: above the last edge is outside; clamp: only below the first edge.
+    let outside_small = [
+        [0.0f32.next_down(), 2.0f32.next_up(), -inf],
+        [-1.0, 3.0, 1.0],
+        [1e30, -1e30, 50.0],
+    ];
+    let outside_small_clamp = [[-inf; 3], [-1.0, -3.0, -5.0], [-1e30; 3]];
+    let mut checked = 0usize;
+    for os in objectness_values() {
+        let want = (os / 3.0).to_bits();
+        let mut check = |name: &str, ml: Scores<3>, map: Scores<3>| {
+            for (head, s) in [("ML", ml), ("MAP", map)] {
+                for v in s.0 {
+                    assert_eq!(
+                        v.to_bits(),
+                        want,
+                        "{name} {head} OS {os}: {v} is not OS/K = {}",
+                        os / 3.0
+                    );
+                }
+            }
+            checked += 1;
+        };
+        for x in &outside_shipped {
+            check(
+                "shipped",
+                shipped.ml(x, os).unwrap(),
+                shipped.map(x, os).unwrap(),
+            );
+        }
+        for x in &outside_small {
+            check("small", small.ml(x, os).unwrap(), small.map(x, os).unwrap());
+        }
+        for x in &outside_small_clamp {
+            let (ml, map) = (
+                small_clamp.ml(x, os).unwrap(),
+                small_clamp.map(x, os).unwrap(),
+            );
+            check("small clamp", ml, map);
+        }
+    }
+    assert!(checked > 10_000);
+}
+
+/// DESIGN §1.3 invariant 2 for other K: 1/2 and 1/5 are exact too.
+#[test]
+fn out_of_support_is_exactly_os_over_k_for_other_k() {
+    let class = |name, lo: f32| mlmap::ClassSpec {
+        name,
+        rows: 10,
+        mean: lo + 0.5,
+        variance: 0.1,
+        ml_range: (lo, lo + 1.0),
+        ml_freqs: [1.0],
+        map_range: (lo, lo + 1.0),
+        map_freqs: [1.0],
+    };
+    let settings = small_settings(UpperTail::Zero);
+    let t2: Table<2, 1, 1> =
+        Table::from_parts(settings, [class("a", 0.0), class("b", 1.0)]).unwrap();
+    let t5: Table<5, 1, 1> = Table::from_parts(
+        settings,
+        [
+            class("a", 0.0),
+            class("b", 1.0),
+            class("c", 2.0),
+            class("d", 3.0),
+            class("e", 4.0),
+        ],
+    )
+    .unwrap();
+    for os in objectness_values() {
+        for s in [
+            t2.ml(&[9.0, -9.0], os).unwrap(),
+            t2.map(&[9.0, -9.0], os).unwrap(),
+        ] {
+            assert_eq!(s.0.map(f32::to_bits), [(os / 2.0).to_bits(); 2], "OS {os}");
+        }
+        let x = [
+            -1.0,
+            0.0f32.next_down(),
+            3.5,
+            f32::NEG_INFINITY,
+            5.0f32.next_up(),
+        ];
+        for s in [t5.ml(&x, os).unwrap(), t5.map(&x, os).unwrap()] {
+            assert_eq!(s.0.map(f32::to_bits), [(os / 5.0).to_bits(); 5], "OS {os}");
+        }
+    }
+}
+
+#[test]
+fn embedded_table_is_the_decoded_file() {
+    use mlmap::embedded;
+    let decoded = embedded::EmbeddedTable::from_bytes(&embedded::BYTES).unwrap();
+    assert_eq!(embedded::TABLE, decoded);
+    // Every derived constant agrees too, so the scores agree bit for bit.
+    for x in [[5.1f32, -2.0, -1.3], [0.0, 0.0, 0.0], [-3.0, 4.0, 1.0]] {
+        assert_eq!(embedded::TABLE.ml(&x, 0.93), decoded.ml(&x, 0.93));
+        assert_eq!(embedded::TABLE.map(&x, 0.93), decoded.map(&x, 0.93));
+    }
+    let shape = (embedded::K, embedded::BINS_ML, embedded::BINS_MAP);
+    // The bytes are those of the file the build named.
+    let source = std::fs::read(embedded::SOURCE).expect("the embedded table's source file");
+    assert_eq!(embedded::BYTES[..], source[..]);
+    if std::env::var_os("MLMAP_TABLE").is_none() {
+        assert_eq!(shape, (3, 22, 17));
+        assert_eq!(embedded::BYTES[..], crate::support::SHIPPED_MLMAP[..]);
+    }
+}
+
+#[test]
+fn autotraits() {
+    fn has_autotraits<T: Send + Sync + Unpin>() {}
+    has_autotraits::<Table<3, 22, 17>>();
+    has_autotraits::<Table<2, 1, 1>>();
+    has_autotraits::<Scores<3>>();
+    has_autotraits::<mlmap::DecodeError>();
+    has_autotraits::<mlmap::EncodeError>();
+    has_autotraits::<mlmap::InferError>();
+    has_autotraits::<mlmap::BatchError>();
+    has_autotraits::<mlmap::TableError>();
+    has_autotraits::<mlmap::Histogram<[f32; 4]>>();
+    has_autotraits::<mlmap::Gaussian>();
+    has_autotraits::<mlmap::Settings>();
+    has_autotraits::<mlmap::Libm>();
+    #[cfg(feature = "micromath")]
+    has_autotraits::<mlmap::FastMath>();
+    #[cfg(feature = "std")]
+    has_autotraits::<mlmap::host::DynTable>();
+}
+
+/// The host's run-time shaped table runs the same code: bit-identical scores, the
+/// same bytes, and the same table back.
+#[cfg(feature = "std")]
+mod dyn_table {
+    use mlmap::host::DynTable;
+    use mlmap::Libm;
+
+    use super::*;
+    use crate::support::SHIPPED_MLMAP;
+
+    fn inputs() -> Vec<([f32; 3], f32)> {
+        let mut v: Vec<([f32; 3], f32)> = goldens(SHIPPED_CSV)
+            .into_iter()
+            .chain(goldens(crate::support::SMALL_CSV))
+            .map(|g| (g.logits, g.objectness))
+            .collect();
+        v.push(([f32::NAN, 0.0, 0.0], 1.0));
+        v.push(([0.0; 3], 1.5));
+        v
+    }
+
+    fn agree<const BM: usize, const BP: usize>(t: &Table<3, BM, BP>, d: &DynTable) {
+        let mut out = [0.0f32; 3];
+        let mut scratch = [0.0f32; 3];
+        for (x, os) in inputs() {
+            let want = t.ml(&x, os).map(|s| s.0.map(f32::to_bits));
+            let got = d.ml_into(&x, os, &mut out, &mut scratch);
+            assert_eq!(got.map(|()| out.map(f32::to_bits)), want, "ML {x:?} {os}");
+            let want = t.map(&x, os).map(|s| s.0.map(f32::to_bits));
+            let got = d.map_into::<Libm>(&x, os, &mut out, &mut scratch);
+            assert_eq!(got.map(|()| out.map(f32::to_bits)), want, "MAP {x:?} {os}");
+        }
+    }
+
+    #[test]
+    fn dyn_table_scores_are_bit_identical() {
+        let t = shipped();
+        let from_bytes = DynTable::from_bytes(SHIPPED_MLMAP).unwrap();
+        let from_table = DynTable::from_table(&t);
+        assert_eq!(from_bytes, from_table);
+        agree(&t, &from_bytes);
+        agree(&small(), &DynTable::from_table(&small()));
+        agree(
+            &small_clamp(),
+            &DynTable::from_bytes(crate::support::SMALL_CLAMP_MLMAP).unwrap(),
+        );
+        // Same bytes, and the same fixed-size table back.
+        assert_eq!(from_bytes.to_vec().unwrap(), SHIPPED_MLMAP);
+        assert_eq!(Shipped::try_from(&from_bytes), Ok(t));
+        assert_eq!(
+            Table::<3, 22, 18>::try_from(&from_bytes),
+            Err(mlmap::DecodeError::ShapeMismatch {
+                expected: (3, 22, 18),
+                found: (3, 22, 17)
+            })
+        );
+    }
+
+    #[test]
+    fn dyn_table_rejects_wrong_lengths() {
+        let d = DynTable::from_bytes(SHIPPED_MLMAP).unwrap();
+        let mut out = [0.0f32; 3];
+        let mut scratch = [0.0f32; 3];
+        let mut short = [0.0f32; 2];
+        assert_eq!(
+            d.ml_into(&[0.0; 2], 1.0, &mut out, &mut scratch),
+            Err(InferError::Length)
+        );
+        assert_eq!(
+            d.ml_into(&[0.0; 3], 1.0, &mut short, &mut scratch),
+            Err(InferError::Length)
+        );
+        assert_eq!(
+            d.map_into::<Libm>(&[0.0; 3], 1.0, &mut out, &mut short),
+            Err(InferError::Length)
+        );
+        assert_eq!(
+            d.map_into::<Libm>(&[0.0; 4], 1.0, &mut out, &mut scratch),
+            Err(InferError::Length)
+        );
+    }
+}
+
+/// The `FastMath` backend's worst-case error on a MAP score (issue 2, item 2).
+#[cfg(feature = "micromath")]
+mod fast_math {
+    use mlmap::{FastMath, FAST_MATH_MAX_SCORE_ERROR};
+
+    use super::*;
+
+    /// A small deterministic generator (xorshift64*), so the random part is repeatable.
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+
+        fn uniform(&mut self, lo: f32, hi: f32) -> f32 {
+            let u = (self.next() >> 40) as f32 / (1u64 << 24) as f32;
+            lo + (hi - lo) * u
+        }
+    }
+
+    /// `steps` points per bin across every MAP bin of class `c`, a margin of two bins on
+    /// each side, and every edge itself.
+    fn grid(t: &Shipped, c: usize, steps: usize) -> Vec<f32> {
+        let h = t.map_histogram(c).unwrap();
+        let w = (h.hi() - h.lo()) / h.bins() as f32;
+        let n = (h.bins() + 4) * steps;
+        let mut v: Vec<f32> = (0..=n)
+            .map(|j| h.lo() - 2.0 * w + j as f32 * w / steps as f32)
+            .collect();
+        v.extend((0..=h.bins()).map(|k| h.edge(k)));
+        v
+    }
+
+    fn worst_difference(t: &Shipped) -> (f32, [f32; 3]) {
+        let mut worst = (0.0f32, [0.0f32; 3]);
+        let mut consider = |x: [f32; 3]| {
+            let exact = t.map(&x, 1.0).unwrap();
+            let fast = t.map_with::<FastMath>(&x, 1.0).unwrap();
+            for (a, b) in exact.0.iter().zip(fast.0) {
+                let d = (a - b).abs();
+                if d > worst.0 {
+                    worst = (d, x);
+                }
+            }
+        };
+        // Dense in one class, coarse (one point per bin, plus outside) in the others:
+        // every bin of every class meets every bin of every other class.
+        let fine: Vec<Vec<f32>> = (0..3).map(|c| grid(t, c, 12)).collect();
+        let coarse: Vec<Vec<f32>> = (0..3)
+            .map(|c| {
+                let h = t.map_histogram(c).unwrap();
+                let mut v: Vec<f32> = (0..h.bins())
+                    .map(|k| 0.5 * (h.edge(k) + h.edge(k + 1)))
+                    .collect();
+                v.push(f32::INFINITY);
+                v
+            })
+            .collect();
+        for c in 0..3 {
+            let (a, b) = ((c + 1) % 3, (c + 2) % 3);
+            for &xc in &fine[c] {
+                for &xa in &coarse[a] {
+                    for &xb in &coarse[b] {
+                        let mut x = [0.0; 3];
+                        x[c] = xc;
+                        x[a] = xa;
+                        x[b] = xb;
+                        consider(x);
+                    }
+                }
+            }
+        }
+        // Random vectors over the union of the supports.
+        let mut rng = Rng(0x5eed_1234_abcd_0001);
+        let (lo, hi) = (0..3).fold((f32::MAX, f32::MIN), |(lo, hi), c| {
+            let h = t.map_histogram(c).unwrap();
+            (lo.min(h.lo()), hi.max(h.hi()))
+        });
+        for _ in 0..50_000 {
+            consider([0, 1, 2].map(|_| rng.uniform(lo, hi)));
+        }
+        worst
+    }
+
+    #[test]
+    fn fast_math_error_bound() {
+        let (worst, at) = worst_difference(&shipped());
+        eprintln!(
+            "FastMath vs Libm, shipped table: worst MAP score difference {worst:e} at {at:?}"
+        );
+        assert!(
+            worst <= FAST_MATH_MAX_SCORE_ERROR,
+            "worst difference {worst:e} at {at:?} exceeds FAST_MATH_MAX_SCORE_ERROR = {FAST_MATH_MAX_SCORE_ERROR:e}"
+        );
+        // The grid does reach the region where the backends differ at all.
+        assert!(worst > 0.0);
+        // Scores scale with the objectness, and so does the difference.
+        let x = at;
+        for os in [0.0, 0.25, 0.9] {
+            let t = shipped();
+            let (e, f) = (
+                t.map(&x, os).unwrap(),
+                t.map_with::<FastMath>(&x, os).unwrap(),
+            );
+            for (a, b) in e.0.iter().zip(f.0) {
+                assert!((a - b).abs() <= FAST_MATH_MAX_SCORE_ERROR * os + f32::EPSILON);
+            }
+        }
+        // The ML head uses no transcendental function, so there is no ML variant to
+        // differ, and the MAP batch API gives the same bits as single calls.
+        let rows = [at, [1.0, -2.0, 0.5]];
+        let mut out = [[0.0; 3]; 2];
+        shipped()
+            .map_batch_with::<FastMath>(&rows, None, &mut out)
+            .unwrap();
+        for (r, o) in rows.iter().zip(out) {
+            assert_eq!(o, shipped().map_with::<FastMath>(r, 1.0).unwrap().0);
+        }
+    }
+}
+
+/// DESIGN §1.3 invariant 3 where the likelihood is positive but too small to change the
+/// class's mass (`L + lambda == lambda` in `f32`; for MAP, a logit far in the prior's
+/// tail): the score must not drop below the no-evidence answer `OS / K`. With K >= 6
+/// and a lambda whose multiples round, a separate `OS / K` shortcut for "no evidence"
+/// and the general normalisation used to disagree by one ulp (regression test, issue 2).
+#[test]
+fn negligible_likelihood_never_lowers_the_score() {
+    fn run<const K: usize>() -> usize {
+        const NAMES: [&str; 8] = ["a", "b", "c", "d", "e", "f", "g", "h"];
+        let mut checked = 0;
+        for j in 0..400u32 {
+            // Lambdas around 5e-4 with assorted mantissas.
+            let lambda = f32::from_bits(0x3a00_0000 + j * 7919);
+            let settings = mlmap::Settings {
+                lambda_ml: lambda,
+                lambda_map: lambda,
+                ..small_settings(UpperTail::Zero)
+            };
+            // Class c: support [c, c + 1]; the first ML bin has frequency 1e-20, and the
+            // prior is so narrow that the MAP mass at the first edge is about 1e-19.
+            let t: Table<K, 2, 1> = Table::from_parts(
+                settings,
+                std::array::from_fn(|c| mlmap::ClassSpec {
+                    name: NAMES[c],
+                    rows: 10,
+                    mean: c as f32 + 0.5,
+                    variance: 0.0028,
+                    ml_range: (c as f32, c as f32 + 1.0),
+                    ml_freqs: [1e-20, 1.0],
+                    map_range: (c as f32, c as f32 + 1.0),
+                    map_freqs: [1.0],
+                }),
+            )
+            .unwrap();
+            let nothing = [-1.0f32; K];
+            for i in 0..K {
+                let mut x = nothing;
+                x[i] = i as f32;
+                for (head, with, without) in [
+                    ("ML", t.ml(&x, 1.0), t.ml(&nothing, 1.0)),
+                    ("MAP", t.map(&x, 1.0), t.map(&nothing, 1.0)),
+                ] {
+                    let (with, without) = (with.unwrap().0[i], without.unwrap().0[i]);
+                    assert_eq!(without, 1.0 / K as f32);
+                    assert!(
+                        with >= without,
+                        "K {K}, lambda {lambda:e}, class {i}, {head}: {with} < {without}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+        checked
+    }
+    let n = run::<2>() + run::<3>() + run::<5>() + run::<6>() + run::<7>() + run::<8>();
+    assert_eq!(n, 400 * 2 * (2 + 3 + 5 + 6 + 7 + 8));
+}
