@@ -199,16 +199,10 @@ pub fn scores_from_evidence(
     if !(0.0..=1.0).contains(&objectness) {
         return Err(InferError::Objectness);
     }
-    let mut any = false;
     for (o, &e) in out.iter_mut().zip(evidence) {
-        any |= e > 0.0;
         *o = e + lambda;
     }
-    if any {
-        normalise(out, scratch, objectness);
-    } else {
-        uniform(out, objectness);
-    }
+    normalise(out, scratch, objectness);
     Ok(())
 }
 
