@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by .ci/thumb.sh and .ci/firmware.sh: gets a Rust toolchain that can build for
 # the Cortex-M4F target and defines `thumb_cargo`, which runs cargo with it.
 #
