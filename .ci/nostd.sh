@@ -31,7 +31,7 @@ for features in "" "micromath" "micromath,defmt"; do
         printf '%s\n' "$bad" >&2
         fail "a dependency enables std/alloc with --no-default-features ${features:+--features $features}"
     fi
-    echo "ok: --no-default-features ${features:+--features $features}: $(wc -l <<<"$tree") lines, no std/alloc feature"
+    echo "ok: --no-default-features${features:+ --features $features}: $(wc -l <<<"$tree") lines, no std/alloc feature"
 done
 # The grep must be able to see a std feature when there is one.
 tree=$(cargo tree --locked -e normal,features,no-proc-macro --no-default-features \
