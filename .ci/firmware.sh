@@ -56,7 +56,7 @@ run_qemu() { # $1 = ELF; prints the firmware's output, returns QEMU's exit statu
 }
 
 section "canary: one perturbed expected value must fail the run"
-thumb_cargo build --locked --release --features canary
+thumb_cargo build --release --features canary
 cp "$elf" "$work/canary.elf"
 status=0
 run_qemu "$work/canary.elf" >"$work/canary.log" 2>&1 || status=$?
@@ -68,7 +68,7 @@ grep -qE '^[0-9]+ passed, [1-9][0-9]* failed$' "$work/canary.log" ||
 echo "ok: the canary firmware failed as it must (exit status $status)"
 
 section "build: cargo build --release --target $THUMB_TARGET (via $THUMB_VIA)"
-thumb_cargo build --locked --release
+thumb_cargo build --release
 size -A "$elf" | grep -E '^\.(vector_table|text|rodata|calib|data|bss) ' || true
 
 section "run on qemu-system-arm -cpu cortex-m4 -machine mps2-an386"

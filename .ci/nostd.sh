@@ -24,7 +24,7 @@ start=$SECONDS
 section "dependency features: no std, no alloc (cargo tree -e features)"
 # Normal dependencies only, proc-macros excluded: they run on the build machine.
 for features in "" "micromath" "micromath,defmt"; do
-    tree=$(cargo tree --locked -e normal,features,no-proc-macro --no-default-features \
+    tree=$(cargo tree -e normal,features,no-proc-macro --no-default-features \
         ${features:+--features "$features"} --prefix none)
     grep -q '^mlmap v' <<<"$tree" || fail "cargo tree printed no tree for [$features]"
     if bad=$(grep -E 'feature "(std|alloc)"' <<<"$tree"); then
@@ -34,7 +34,7 @@ for features in "" "micromath" "micromath,defmt"; do
     echo "ok: --no-default-features${features:+ --features $features}: $(wc -l <<<"$tree") lines, no std/alloc feature"
 done
 # The grep must be able to see a std feature when there is one.
-tree=$(cargo tree --locked -e normal,features,no-proc-macro --no-default-features \
+tree=$(cargo tree -e normal,features,no-proc-macro --no-default-features \
     --features std --prefix none)
 grep -qE 'feature "std"' <<<"$tree" ||
     fail "the std/alloc grep found nothing even with --features std: the check is blind"
@@ -46,7 +46,7 @@ cd nostd-check
 
 section "canary: a deliberate panic must fail the link"
 log=$(mktemp)
-if cargo build --locked --release --features canary >"$log" 2>&1; then
+if cargo build --release --features canary >"$log" 2>&1; then
     cat "$log" >&2
     fail "the canary build linked: the panic handler does not make a reachable panic fail the link"
 fi
@@ -79,11 +79,11 @@ check_binary() { # $1 = label, $2 = binary
 }
 
 section "link without panic paths: default backend (libm)"
-cargo build --locked --release
+cargo build --release
 check_binary "nostd-check (libm)" target/release/mlmap-nostd-check
 
 section "link without panic paths: --features micromath (FastMath)"
-cargo build --locked --release --features micromath --target-dir target/micromath
+cargo build --release --features micromath --target-dir target/micromath
 check_binary "nostd-check (micromath)" target/micromath/release/mlmap-nostd-check
 
 section "passed in $((SECONDS - start)) s: no std, no alloc, no reachable panic"

@@ -23,7 +23,7 @@ fi
 echo "toolchain: $THUMB_VIA"
 
 for features in "" "micromath,defmt"; do
-    args=(build --locked --lib --no-default-features ${features:+--features "$features"})
+    args=(build --lib --no-default-features ${features:+--features "$features"})
     section "cargo ${args[*]} --target $THUMB_TARGET (via $THUMB_VIA)"
     thumb_cargo "${args[@]}"
 done
