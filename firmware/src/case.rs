@@ -1,0 +1,39 @@
+//! The shapes of the checked cases (values in `expected.rs`).
+
+use mlmap::InferError;
+
+/// What one head must answer for a detection.
+pub struct Expect<const K: usize> {
+    /// The scores, computed in float64 on the host.
+    pub scores: [f64; K],
+    /// No class has any evidence: every score must be exactly `OS / K` in `f32`.
+    pub uniform: bool,
+    /// The predicted class, unless the two best scores are too close to call.
+    pub argmax: Option<usize>,
+}
+
+/// A valid detection.
+pub struct Case<const K: usize> {
+    /// What the case exercises.
+    pub label: &'static str,
+    /// Class logits.
+    pub logits: [f32; K],
+    /// Objectness.
+    pub objectness: f32,
+    /// The ML head's answer.
+    pub ml: Expect<K>,
+    /// The MAP head's answer.
+    pub map: Expect<K>,
+}
+
+/// An input the layer must reject.
+pub struct ErrorCase<const K: usize> {
+    /// What the case exercises.
+    pub label: &'static str,
+    /// Class logits.
+    pub logits: [f32; K],
+    /// Objectness.
+    pub objectness: f32,
+    /// The error both heads must return.
+    pub error: InferError,
+}

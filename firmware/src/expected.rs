@@ -1,0 +1,816 @@
+//! Inputs and expected scores for the firmware example, computed in float64 by
+//! `python3 tools/firmware_expected.py` from `tables/default.mlmap`.
+//! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.
+
+use crate::case::{Case, ErrorCase, Expect};
+use mlmap::InferError;
+
+/// Number of classes of the table.
+pub const K: usize = 3;
+/// The classes, in order: "car", "cyclist", "pedestrian".
+pub const CLASS_NAMES: [&str; K] = ["car", "cyclist", "pedestrian"];
+/// CRC-32 of the table the values were computed from (its last four bytes).
+pub const TABLE_CRC: u32 = 0x7c991078;
+
+/// Valid detections and their float64 ML and MAP scores.
+pub static CASES: &[Case<K>] = &[
+    Case {
+        label: "inside ML bin 0 of every class",
+        logits: [0.09306364, -6.746873, -6.31205],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.31833455845905556, 0.3314334775583502, 0.3502319639825942],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.3336447477149684, 0.33317764812839257, 0.333177604156639],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "inside ML bin 11 of every class",
+        logits: [4.8508635, 0.24092698, 0.4056499],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.7029691675770814, 0.19859512721422942, 0.09843570520868916],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.9323755789243818, 0.052091489283691554, 0.015532931791926686],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "inside ML bin 21 of every class",
+        logits: [9.176136, 6.5934725, 6.51265],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.27955380975351096, 0.3350396747331655, 0.38540651551332356],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.26413407440277487, 0.3204168876030338, 0.4154490379941914],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "on inner ML edge 1 of every class",
+        logits: [0.30932727, -6.4292455, -6.0067],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.26955976960464684, 0.27232059347160587, 0.3581196130818894],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.3005580854146602, 0.2997209879410242, 0.29972090280245767],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "on inner ML edge 7 of every class",
+        logits: [2.904491, -2.6177182, -2.3425002],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.7296012780376697, 0.0746626546536225, 0.09573604346684986],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.8851610688016616, 0.00798462052720306, 0.006854286829277404],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "on inner ML edge 21 of every class",
+        logits: [8.959872, 6.2758446, 6.2073],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.25159842211307765, 0.3015356992718806, 0.3468658547731838],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.21566744858833634, 0.2872125980656827, 0.3971199295041229],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "on inner MAP edge 1 of every class",
+        logits: [0.4365412, -6.242406, -5.8270826],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.23960869401092974, 0.24206275977202785, 0.31832855813797134],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.26914524578459625, 0.26542729260049075, 0.26542747353584195],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "on inner MAP edge 8 of every class",
+        logits: [4.3547297, -0.4877472, -0.29485893],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.6903421791408845, 0.07251520485460394, 0.03714262792544049],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.7724146705228209, 0.021303614930242857, 0.00628172646786527],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "on the first ML edge of every class",
+        logits: [-0.1232, -7.0645, -6.6174],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.31833455845905556, 0.3314334775583502, 0.3502319639825942],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.3334840645441536, 0.3332579772074441, 0.3332579582484023],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "on the closed last ML edge of every class",
+        logits: [9.3924, 6.9111, 6.818],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.27955380975351096, 0.3350396747331655, 0.38540651551332356],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.28494858625062486, 0.322631596842139, 0.3924198169072361],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "on the closed last MAP edge of every class",
+        logits: [9.3924, 6.9111, 6.818],
+        objectness: 0.75,
+        ml: Expect {
+            scores: [0.20966535731513322, 0.2512797560498741, 0.2890548866349927],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.21371143968796866, 0.24197369763160426, 0.29431486268042706],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "class 0 one ulp above its last ML edge",
+        logits: [9.392401, -4.8411093, -4.47995],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.25269566606648425, 0.33532996076942767, 0.4119743731640881],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.3331896292845227, 0.33343251248717476, 0.33337785822830246],
+            uniform: false,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "class 0 one ulp below its first ML edge",
+        logits: [-0.12320001, -4.8411093, -4.47995],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.25269566606648425, 0.33532996076942767, 0.4119743731640881],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.3331896292845227, 0.33343251248717476, 0.33337785822830246],
+            uniform: false,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "only class 0 in support, at its mean",
+        logits: [4.276356, -10000.0, -10000.0],
+        objectness: 0.6,
+        ml: Expect {
+            scores: [0.5615834035065982, 0.01920831016762984, 0.01920831016762984],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.5979664194432056, 0.0010168021993261665, 0.0010168021993261665],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "class 1 one ulp above its last ML edge",
+        logits: [1.3906454, 6.9111004, -4.47995],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.45240991175250583, 0.2081839618365948, 0.3394061264108994],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.4695598290870662, 0.2651451911697069, 0.26529497974322686],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "class 1 one ulp below its first ML edge",
+        logits: [1.3906454, -7.0645003, -4.47995],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.45240991175250583, 0.2081839618365948, 0.3394061264108994],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.4695598290870662, 0.2651451911697069, 0.26529497974322686],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "only class 1 in support, at its mean",
+        logits: [-10000.0, 2.3360717, -10000.0],
+        objectness: 0.6,
+        ml: Expect {
+            scores: [0.017173236283208673, 0.5656535512754406, 0.017173236283208673],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.0012602268925535527, 0.5974795700567509, 0.0012602268925535527],
+            uniform: false,
+            argmax: Some(1),
+        },
+    },
+    Case {
+        label: "class 2 one ulp above its last ML edge",
+        logits: [1.3906454, -4.8411093, 6.8180003],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.4829021356990478, 0.2948823973591542, 0.22221546694179797],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.4695394075542417, 0.26532693265264995, 0.26513365979310843],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "class 2 one ulp below its first ML edge",
+        logits: [1.3906454, -4.8411093, -6.6174006],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.4829021356990478, 0.2948823973591542, 0.22221546694179797],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.4695394075542417, 0.26532693265264995, 0.26513365979310843],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "only class 2 in support, at its mean",
+        logits: [-10000.0, -10000.0, 2.866103],
+        objectness: 0.6,
+        ml: Expect {
+            scores: [0.013645453461991627, 0.013645453461991627, 0.5727091169178746],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.0012740288597111404, 0.0012740288597111404, 0.5974519661224356],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "far above every support",
+        logits: [109.3924, 109.3924, 109.3924],
+        objectness: 0.7,
+        ml: Expect {
+            scores: [0.23333332935969034, 0.23333332935969034, 0.23333332935969034],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.23333332935969034, 0.23333332935969034, 0.23333332935969034],
+            uniform: true,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "far below every support",
+        logits: [-109.3924, -109.3924, -109.3924],
+        objectness: 0.7,
+        ml: Expect {
+            scores: [0.23333332935969034, 0.23333332935969034, 0.23333332935969034],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.23333332935969034, 0.23333332935969034, 0.23333332935969034],
+            uniform: true,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "alternating far outside",
+        logits: [-109.3924, 109.3924, -109.3924],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "+inf everywhere",
+        logits: [f32::INFINITY, f32::INFINITY, f32::INFINITY],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "-inf everywhere",
+        logits: [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY],
+        objectness: 0.5,
+        ml: Expect {
+            scores: [0.16666666666666666, 0.16666666666666666, 0.16666666666666666],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.16666666666666666, 0.16666666666666666, 0.16666666666666666],
+            uniform: true,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "largest finite values",
+        logits: [-3.4e+38, 3.4e+38, -3.4e+38],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "+inf in class 0, others inside",
+        logits: [f32::INFINITY, -3.5706, -3.2585502],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.15376071002195632, 0.47220996698023393, 0.3740293229978097],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.3232631449680719, 0.34615764535197285, 0.33057920967995524],
+            uniform: false,
+            argmax: Some(1),
+        },
+    },
+    Case {
+        label: "-inf in the last class, others inside",
+        logits: [2.2557, -3.5706, f32::NEG_INFINITY],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.5448804400696937, 0.26788952034214125, 0.0872300157463071],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.838886684404625, 0.031601697286682176, 0.029511594466834858],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "objectness 0.0",
+        logits: [4.276356, 2.3360717, 2.866103],
+        objectness: 0.0,
+        ml: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: false,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: false,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "objectness 1.0",
+        logits: [4.276356, 2.3360717, 2.866103],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.28072791268282987, 0.3162706306465886, 0.4030014566705815],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.3840840407892362, 0.30964228250415704, 0.3062736767066067],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "objectness 0.37",
+        logits: [4.276356, 2.3360717, 2.866103],
+        objectness: 0.37,
+        ml: Expect {
+            scores: [0.10386932903126206, 0.11702013484733367, 0.14911054088977585],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.14211109692347282, 0.11456764600302757, 0.11332126184187118],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "objectness 1e-06",
+        logits: [4.276356, 2.3360717, 2.866103],
+        objectness: 1e-06,
+        ml: Expect {
+            scores: [2.8072791197406004e-07, 3.1627062984808207e-07, 4.0300145565310066e-07],
+            uniform: false,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [3.840840398195172e-07, 3.0964228172238546e-07, 3.0627367593334e-07],
+            uniform: false,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "objectness 0, outside every support",
+        logits: [109.3924, 109.3924, 109.3924],
+        objectness: 0.0,
+        ml: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: true,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "test.csv id 25001 (background)",
+        logits: [2.6283, -3.7759, -3.7148],
+        objectness: 0.6091,
+        ml: Expect {
+            scores: [0.4219950552284012, 0.11389291998329093, 0.07321200895731422],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.5840353630174463, 0.012783673229358642, 0.012280947922201448],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25002 (pedestrian)",
+        logits: [-1.5155, -2.1577, 4.7103],
+        objectness: 0.7606,
+        ml: Expect {
+            scores: [0.0399001773880985, 0.07034504956499932, 0.6503547438644681],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.008248931413928684, 0.013195850935153224, 0.739155188468484],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "test.csv id 25003 (cyclist)",
+        logits: [-4.5564, 4.2786, 1.5954],
+        objectness: 0.9668,
+        ml: Expect {
+            scores: [0.026315162471930033, 0.5311623916586264, 0.4093224203109718],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.0031974065763979258, 0.4492516430547823, 0.5143509248103482],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "test.csv id 25004 (cyclist)",
+        logits: [-5.2637, 2.7016, -3.642],
+        objectness: 0.8178,
+        ml: Expect {
+            scores: [0.020756169207599956, 0.7560684755411242, 0.04097534066005881],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.0017568890350236836, 0.8142749540816631, 0.001768142292096222],
+            uniform: false,
+            argmax: Some(1),
+        },
+    },
+    Case {
+        label: "test.csv id 25005 (car)",
+        logits: [1.6454, -4.9396, -3.7251],
+        objectness: 0.8827,
+        ml: Expect {
+            scores: [0.475301023326228, 0.16376860922262257, 0.2436303934864583],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.6276925952910957, 0.1272054465258569, 0.12780198421835615],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25006 (car)",
+        logits: [1.5308, -2.0375, -4.4045],
+        objectness: 0.9384,
+        ml: Expect {
+            scores: [0.3663472676707246, 0.29721233395794855, 0.27484036890279046],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.436179450584012, 0.2892806530700389, 0.21293986687741276],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25007 (background)",
+        logits: [3.9984, -4.2986, -3.707],
+        objectness: 0.3099,
+        ml: Expect {
+            scores: [0.26826242456229055, 0.022918685414053508, 0.018718875813908634],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.3088086331690662, 0.000547187470204615, 0.0005441651509819451],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25008 (pedestrian)",
+        logits: [-2.3733, -3.813, 3.9806],
+        objectness: 0.8863,
+        ml: Expect {
+            scores: [0.027894187777252447, 0.08566501473202051, 0.7727408248611799],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.002811018685181924, 0.002900537693041106, 0.8805884709922299],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "test.csv id 25009 (background)",
+        logits: [3.4216, -3.4924, -3.6607],
+        objectness: 0.675,
+        ml: Expect {
+            scores: [0.5548799589665759, 0.07311845634949389, 0.0470015966048591],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.6709298748491284, 0.002109748423956479, 0.001960388647844232],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25010 (car)",
+        logits: [4.2784, -2.2393, -2.689],
+        objectness: 0.7741,
+        ml: Expect {
+            scores: [0.6899623870814471, 0.04160629316639261, 0.042531325378838795],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.7706876905326756, 0.0020034776150249156, 0.0014088374789779628],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25011 (car)",
+        logits: [4.4131, -2.9186, -5.1224],
+        objectness: 0.9002,
+        ml: Expect {
+            scores: [0.7766791677262473, 0.07868852218019547, 0.0448323194395655],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.8966926944306406, 0.0018908627839705136, 0.001616452131397271],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25012 (car)",
+        logits: [5.836, -1.89, -3.0412],
+        objectness: 0.8762,
+        ml: Expect {
+            scores: [0.6669412987157289, 0.08469672693278069, 0.12456199466475328],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.8537307385654677, 0.013089089837196335, 0.009380191910598926],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25013 (car)",
+        logits: [4.4407, -3.1612, -3.402],
+        objectness: 0.7329,
+        ml: Expect {
+            scores: [0.618733573815274, 0.0626864123178792, 0.051480037327234926],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.7300311061350415, 0.0015270378831371727, 0.0013418794422094052],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25014 (pedestrian)",
+        logits: [-4.7499, -6.611, 2.7963],
+        objectness: 0.8177,
+        ml: Expect {
+            scores: [0.018550491910344084, 0.020572564336127374, 0.7785769721730231],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.0017378042289123115, 0.0017378066994553903, 0.8142244174911268],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "test.csv id 25015 (car)",
+        logits: [4.0221, -3.7995, -4.6135],
+        objectness: 0.9311,
+        ml: Expect {
+            scores: [0.7984208860226911, 0.08666948385292016, 0.04600964099627589],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.9278103480356443, 0.0016710119105855902, 0.0016186509256574191],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "test.csv id 25016 (car)",
+        logits: [4.5637, -3.9038, -3.603],
+        objectness: 0.8961,
+        ml: Expect {
+            scores: [0.7790851991579238, 0.0644087928855347, 0.05260599260238491],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.8927453272762887, 0.001693236273369628, 0.0016614210961849374],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+];
+
+/// Inputs the layer must reject, and the error it must give.
+pub static ERROR_CASES: &[ErrorCase<K>] = &[
+    ErrorCase {
+        label: "NaN logit in class 0",
+        logits: [f32::NAN, 1.0, 1.0],
+        objectness: 0.9,
+        error: InferError::NanLogit { class: 0 },
+    },
+    ErrorCase {
+        label: "NaN logit in class 1",
+        logits: [1.0, f32::NAN, 1.0],
+        objectness: 0.9,
+        error: InferError::NanLogit { class: 1 },
+    },
+    ErrorCase {
+        label: "NaN logit in class 2",
+        logits: [1.0, 1.0, f32::NAN],
+        objectness: 0.9,
+        error: InferError::NanLogit { class: 2 },
+    },
+    ErrorCase {
+        label: "NaN logits everywhere",
+        logits: [f32::NAN, f32::NAN, f32::NAN],
+        objectness: 1.0,
+        error: InferError::NanLogit { class: 0 },
+    },
+    ErrorCase {
+        label: "NaN logit and bad objectness",
+        logits: [f32::NAN, f32::NAN, f32::NAN],
+        objectness: 2.0,
+        error: InferError::NanLogit { class: 0 },
+    },
+    ErrorCase {
+        label: "objectness 1.5",
+        logits: [0.0, 0.0, 0.0],
+        objectness: 1.5,
+        error: InferError::Objectness,
+    },
+    ErrorCase {
+        label: "objectness -0.25",
+        logits: [0.0, 0.0, 0.0],
+        objectness: -0.25,
+        error: InferError::Objectness,
+    },
+    ErrorCase {
+        label: "objectness inf",
+        logits: [0.0, 0.0, 0.0],
+        objectness: f32::INFINITY,
+        error: InferError::Objectness,
+    },
+    ErrorCase {
+        label: "objectness nan",
+        logits: [0.0, 0.0, 0.0],
+        objectness: f32::NAN,
+        error: InferError::Objectness,
+    },
+    ErrorCase {
+        label: "objectness just above 1",
+        logits: [0.0, 0.0, 0.0],
+        objectness: 1.0000001,
+        error: InferError::Objectness,
+    },
+];

@@ -1,0 +1,332 @@
+#!/usr/bin/env python3
+"""Writes firmware/src/expected.rs: the inputs the firmware example scores on the emulated
+Cortex-M4F and the scores it must get, computed here in float64.
+
+This shares no code with the Rust crate: the table file is decoded here from
+docs/FORMAT.md (and checked by re-encoding it with tools/mlmap_ref.py), bins are found by
+comparing against the float32 edges the format defines, and ML and MAP are evaluated in
+float64 from DESIGN.md §1.2. The firmware checks its float32 results against these
+values within a tolerance, and exactly where the answer is `OS / K`.
+
+    python3 tools/firmware_expected.py [TABLE] [OUT]     # defaults: tables/default.mlmap,
+                                                         #           firmware/src/expected.rs
+    python3 tools/firmware_expected.py --check           # exit 1 if OUT is out of date
+"""
+import csv
+import json
+import math
+import os
+import struct
+import sys
+import zlib
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import mlmap_ref  # noqa: E402  (encode and the float32 edge rule only)
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEFAULT_TABLE = os.path.join(ROOT, "tables", "default.mlmap")
+DEFAULT_OUT = os.path.join(ROOT, "firmware", "src", "expected.rs")
+TEST_CSV = os.path.join(ROOT, "examples", "data", "test.csv")
+
+# Rows of examples/data/test.csv scored besides the synthetic cases.
+CSV_ROWS = 16
+# Below this margin between the two largest scores, the predicted class is not checked
+# (float32 rounding could legitimately pick the other one).
+ARGMAX_MARGIN = 1e-4
+TAIL_NAMES = {0: "zero", 1: "clamp"}
+
+
+class Reader:
+    def __init__(self, data):
+        self.data = data
+        self.pos = 0
+
+    def take(self, n):
+        if self.pos + n > len(self.data):
+            raise ValueError("truncated table")
+        out = self.data[self.pos:self.pos + n]
+        self.pos += n
+        return out
+
+    def varint(self):
+        value, shift = 0, 0
+        while True:
+            b = self.take(1)[0]
+            value |= (b & 0x7F) << shift
+            shift += 7
+            if not b & 0x80:
+                return value
+
+    def f32(self):
+        return np.float32(struct.unpack("<f", self.take(4))[0])
+
+    def u8(self):
+        return self.take(1)[0]
+
+
+def decode(data):
+    """The table as a dict, from the bytes of a version-1 `.mlmap` file."""
+    body, crc = data[:-4], struct.unpack("<I", data[-4:])[0]
+    if zlib.crc32(body) & 0xFFFFFFFF != crc:
+        raise ValueError("CRC mismatch")
+    r = Reader(body)
+    if r.take(4) != mlmap_ref.MAGIC:
+        raise ValueError("not a table")
+    version, k, bins_ml, bins_map = (r.varint() for _ in range(4))
+    if version != mlmap_ref.VERSION:
+        raise ValueError(f"format version {version}")
+    edge_mode, upper_tail = r.u8(), r.u8()
+    lambda_ml, lambda_map = r.f32(), r.f32()
+    if r.varint() != k:
+        raise ValueError("class count")
+    classes = []
+    for _ in range(k):
+        name = r.take(r.varint()).decode()
+        rows = r.varint()
+        mean, var = r.f32(), r.f32()
+        ml_lo, ml_hi = r.f32(), r.f32()
+        ml_freqs = [r.f32() for _ in range(r.varint())]
+        map_lo, map_hi = r.f32(), r.f32()
+        map_freqs = [r.f32() for _ in range(r.varint())]
+        assert len(ml_freqs) == bins_ml and len(map_freqs) == bins_map
+        classes.append(dict(name=name, rows=rows, mean=mean, var=var,
+                            ml_lo=ml_lo, ml_hi=ml_hi, ml_freqs=ml_freqs,
+                            map_lo=map_lo, map_hi=map_hi, map_freqs=map_freqs))
+    if r.pos != len(body):
+        raise ValueError("trailing bytes")
+    # The decoder and the independent encoder must agree byte for byte.
+    again = mlmap_ref.encode(classes, lambda_ml, lambda_map, edge_mode, upper_tail)
+    if again != bytes(data):
+        raise ValueError("re-encoding the decoded table gives other bytes")
+    return dict(k=k, bins_ml=bins_ml, bins_map=bins_map, edge_mode=edge_mode,
+                upper_tail=upper_tail, lambda_ml=lambda_ml, lambda_map=lambda_map,
+                classes=classes, crc=crc)
+
+
+def likelihood(x, lo, hi, freqs, upper_tail):
+    """Frequency of the bin holding float32 `x` (numpy's rule, last bin closed), else 0."""
+    edges = mlmap_ref.edges_f32(lo, hi, len(freqs))
+    if x > edges[-1] and upper_tail == 1:
+        return float(freqs[-1])
+    if not (edges[0] <= x <= edges[-1]):
+        return 0.0
+    for b in range(len(freqs)):
+        if edges[b] <= x < edges[b + 1] or (b == len(freqs) - 1 and x == edges[-1]):
+            return float(freqs[b])
+    raise AssertionError("unreachable")
+
+
+def gaussian(x, mean, var):
+    if not math.isfinite(x):
+        return 0.0
+    mean, var = float(mean), float(var)
+    return math.exp(-((x - mean) ** 2) / (2.0 * var)) / math.sqrt(2.0 * math.pi * var)
+
+
+def layer(table, logits, os_):
+    """float64 ML and MAP scores, and whether each head had no evidence at all."""
+    ml_a, map_a = [], []
+    for c, x in zip(table["classes"], logits):
+        x = float(x)
+        l_ml = likelihood(np.float32(x), c["ml_lo"], c["ml_hi"], c["ml_freqs"], table["upper_tail"])
+        l_map = likelihood(np.float32(x), c["map_lo"], c["map_hi"], c["map_freqs"],
+                           table["upper_tail"])
+        ml_a.append(l_ml)
+        map_a.append(l_map * gaussian(x, c["mean"], c["var"]) if l_map > 0 else 0.0)
+    os_ = float(os_)
+    out = []
+    for a, lam in ((ml_a, float(table["lambda_ml"])), (map_a, float(table["lambda_map"]))):
+        uniform = all(v == 0.0 for v in a)
+        total = sum(v + lam for v in a)
+        out.append(([os_ * (v + lam) / total for v in a], uniform))
+    return out
+
+
+def argmax(scores):
+    order = sorted(range(len(scores)), key=lambda i: (-scores[i], i))
+    if len(scores) > 1 and scores[order[0]] - scores[order[1]] < ARGMAX_MARGIN:
+        return None
+    return order[0]
+
+
+def cases(table):
+    """(label, logits, objectness) triples, float32 values."""
+    f = np.float32
+    cls = table["classes"]
+    k = table["k"]
+    out = []
+
+    def add(label, logits, os_):
+        out.append((label, [f(v) for v in logits], f(os_)))
+
+    ml_edges = [mlmap_ref.edges_f32(c["ml_lo"], c["ml_hi"], table["bins_ml"]) for c in cls]
+    map_edges = [mlmap_ref.edges_f32(c["map_lo"], c["map_hi"], table["bins_map"]) for c in cls]
+    for b in (0, table["bins_ml"] // 2, table["bins_ml"] - 1):
+        add(f"inside ML bin {b} of every class", [(e[b] + e[b + 1]) / 2 for e in ml_edges], 1.0)
+    for b in (1, table["bins_ml"] // 3, table["bins_ml"] - 1):
+        add(f"on inner ML edge {b} of every class", [e[b] for e in ml_edges], 0.9)
+    for b in (1, table["bins_map"] // 2):
+        add(f"on inner MAP edge {b} of every class", [e[b] for e in map_edges], 0.8)
+    add("on the first ML edge of every class", [e[0] for e in ml_edges], 1.0)
+    add("on the closed last ML edge of every class", [e[-1] for e in ml_edges], 1.0)
+    add("on the closed last MAP edge of every class", [e[-1] for e in map_edges], 0.75)
+    for i in range(k):
+        xs = [(e[3] + e[4]) / 2 for e in ml_edges]
+        xs[i] = np.nextafter(f(ml_edges[i][-1]), f(np.inf))
+        add(f"class {i} one ulp above its last ML edge", xs, 1.0)
+        xs = [(e[3] + e[4]) / 2 for e in ml_edges]
+        xs[i] = np.nextafter(f(ml_edges[i][0]), f(-np.inf))
+        add(f"class {i} one ulp below its first ML edge", xs, 1.0)
+        xs = [-1e4] * k
+        xs[i] = cls[i]["mean"]
+        add(f"only class {i} in support, at its mean", xs, 0.6)
+    far = max(max(c["ml_hi"], c["map_hi"]) for c in cls) + 100.0
+    add("far above every support", [far] * k, 0.7)
+    add("far below every support", [-far] * k, 0.7)
+    add("alternating far outside", [far if i % 2 else -far for i in range(k)], 1.0)
+    add("+inf everywhere", [np.inf] * k, 1.0)
+    add("-inf everywhere", [-np.inf] * k, 0.5)
+    add("largest finite values", [3.4e38 if i % 2 else -3.4e38 for i in range(k)], 1.0)
+    mid = [(e[5] + e[6]) / 2 for e in ml_edges]
+    add("+inf in class 0, others inside", [np.inf] + mid[1:], 1.0)
+    add("-inf in the last class, others inside", mid[:-1] + [-np.inf], 0.9)
+    for os_ in (0.0, 1.0, 0.37, 1e-6):
+        add(f"objectness {os_}", [c["mean"] for c in cls], os_)
+    add("objectness 0, outside every support", [far] * k, 0.0)
+    with open(TEST_CSV) as fh:
+        for row in list(csv.DictReader(fh))[:CSV_ROWS]:
+            add(f"test.csv id {row['id']} ({row['label']})",
+                [float(row[c["name"]]) for c in cls], float(row["objectness"]))
+    return out
+
+
+def error_cases(k):
+    """(label, logits, objectness, expected error) for inputs the layer must reject."""
+    f = np.float32
+    out = []
+    for i in range(k):
+        xs = [f(1.0)] * k
+        xs[i] = f(np.nan)
+        out.append((f"NaN logit in class {i}", xs, f(0.9), f"NanLogit {{ class: {i} }}"))
+    out.append(("NaN logits everywhere", [f(np.nan)] * k, f(1.0), "NanLogit { class: 0 }"))
+    out.append(("NaN logit and bad objectness", [f(np.nan)] * k, f(2.0),
+                "NanLogit { class: 0 }"))
+    for os_ in (1.5, -0.25, np.inf, np.nan):
+        out.append((f"objectness {os_}", [f(0.0)] * k, f(os_), "Objectness"))
+    out.append(("objectness just above 1", [f(0.0)] * k,
+                np.nextafter(f(1.0), f(2.0)), "Objectness"))
+    return out
+
+
+def lit(v):
+    """A Rust f32 expression for float32 `v`, exact."""
+    v = np.float32(v)
+    if np.isnan(v):
+        return "f32::NAN"
+    if np.isinf(v):
+        return "f32::INFINITY" if v > 0 else "f32::NEG_INFINITY"
+    s = str(v)
+    if "e" not in s and "." not in s:
+        s += ".0"
+    assert np.float32(s) == v, (s, v)
+    return s
+
+
+def lit64(v):
+    s = repr(float(v))
+    return s if ("." in s or "e" in s) else s + ".0"
+
+
+def render(table, source):
+    k = table["k"]
+    names = ", ".join(f'"{c["name"]}"' for c in table["classes"])
+    lines = [
+        f"//! Inputs and expected scores for the firmware example, computed in float64 by",
+        f"//! `python3 tools/firmware_expected.py` from `{source}`.",
+        "//! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.",
+        "",
+        "use crate::case::{Case, ErrorCase, Expect};",
+        "use mlmap::InferError;",
+        "",
+        "/// Number of classes of the table.",
+        f"pub const K: usize = {k};",
+        f"/// The classes, in order: {names}.",
+        f"pub const CLASS_NAMES: [&str; K] = [{names}];",
+        "/// CRC-32 of the table the values were computed from (its last four bytes).",
+        f"pub const TABLE_CRC: u32 = 0x{table['crc']:08x};",
+        "",
+        "/// Valid detections and their float64 ML and MAP scores.",
+        "pub static CASES: &[Case<K>] = &[",
+    ]
+    for label, logits, os_ in cases(table):
+        (ml, ml_uniform), (mp, map_uniform) = layer(table, logits, os_)
+        # No evidence in a head: every score is exactly OS / K in float32.
+        share = np.float32(os_) / np.float32(k)
+        if ml_uniform:
+            assert all(abs(v - float(share)) < 1e-7 for v in ml)
+        if map_uniform:
+            assert all(abs(v - float(share)) < 1e-7 for v in mp)
+        lines += [
+            "    Case {",
+            f"        label: {json.dumps(label)},",
+            f"        logits: [{', '.join(lit(x) for x in logits)}],",
+            f"        objectness: {lit(os_)},",
+            "        ml: Expect {",
+            f"            scores: [{', '.join(lit64(v) for v in ml)}],",
+            f"            uniform: {str(ml_uniform).lower()},",
+            f"            argmax: {rust_opt(argmax(ml))},",
+            "        },",
+            "        map: Expect {",
+            f"            scores: [{', '.join(lit64(v) for v in mp)}],",
+            f"            uniform: {str(map_uniform).lower()},",
+            f"            argmax: {rust_opt(argmax(mp))},",
+            "        },",
+            "    },",
+        ]
+    lines += ["];", "", "/// Inputs the layer must reject, and the error it must give.",
+              "pub static ERROR_CASES: &[ErrorCase<K>] = &["]
+    for label, logits, os_, err in error_cases(k):
+        lines += [
+            "    ErrorCase {",
+            f"        label: {json.dumps(label)},",
+            f"        logits: [{', '.join(lit(x) for x in logits)}],",
+            f"        objectness: {lit(os_)},",
+            f"        error: InferError::{err},",
+            "    },",
+        ]
+    lines += ["];", ""]
+    return "\n".join(lines)
+
+
+def rust_opt(v):
+    return "None" if v is None else f"Some({v})"
+
+
+def main(argv):
+    check = "--check" in argv
+    args = [a for a in argv if a != "--check"]
+    table_path = args[0] if len(args) > 0 else DEFAULT_TABLE
+    out_path = args[1] if len(args) > 1 else DEFAULT_OUT
+    with open(table_path, "rb") as fh:
+        table = decode(fh.read())
+    source = os.path.relpath(os.path.abspath(table_path), ROOT)
+    text = render(table, source)
+    if check:
+        with open(out_path) as fh:
+            if fh.read() != text:
+                print(f"{out_path} is out of date: run python3 tools/firmware_expected.py",
+                      file=sys.stderr)
+                return 1
+        print(f"{out_path} is up to date")
+        return 0
+    with open(out_path, "w") as fh:
+        fh.write(text)
+    print(f"wrote {out_path}: {text.count('    Case {')} cases, "
+          f"{text.count('    ErrorCase {')} error cases")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
