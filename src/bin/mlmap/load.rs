@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use mlmap::host::dataset::{DataError, DataSource, Label};
+use std::fmt::Display;
+
+use mlmap::host::dataset::{DataError, DataSource, Label, Location};
 
 use crate::error::{CliError, Result};
 
@@ -13,6 +15,14 @@ pub fn data_error(e: DataError) -> CliError {
         CliError::Input(e.to_string())
     } else {
         CliError::Internal(e.to_string())
+    }
+}
+
+/// Bad input at a position of a file, formatted like the readers' errors.
+pub fn at(path: &Path, location: Location, msg: impl Display) -> CliError {
+    match location {
+        Location::Line(l) => CliError::Input(format!("{}:{l}: {msg}", path.display())),
+        Location::Row(r) => CliError::Input(format!("{}: row index {r}: {msg}", path.display())),
     }
 }
 
@@ -32,6 +42,8 @@ pub struct Loaded {
     pub objectness: Vec<f64>,
     /// N x K logits, row-major.
     pub logits: Vec<f64>,
+    /// Where each row is in its file (CSV line or NPY row index), for errors.
+    pub locations: Vec<Location>,
 }
 
 impl Loaded {
@@ -78,11 +90,13 @@ pub fn load(path: &Path) -> Result<Loaded> {
         labels: Vec::new(),
         objectness: Vec::new(),
         logits: Vec::new(),
+        locations: Vec::new(),
     };
     src.for_each_row(|row| -> Result<()> {
         d.labels.push(row.label);
         d.objectness.push(row.objectness);
         d.logits.extend_from_slice(row.logits);
+        d.locations.push(row.location());
         Ok(())
     })?;
     if d.labels.is_empty() {

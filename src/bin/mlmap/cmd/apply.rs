@@ -41,9 +41,7 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
                 *d = s as f32;
             }
             let os = row.objectness as f32;
-            let at = |e: mlmap::InferError| {
-                CliError::input(&args.input, format!("{:?}: {e}", row.location()))
-            };
+            let at = |e: mlmap::InferError| load::at(&args.input, row.location(), e);
             table.ml_into(&x, os, &mut ml, &mut scratch).map_err(at)?;
             table
                 .map_into::<Libm>(&x, os, &mut map, &mut scratch)
