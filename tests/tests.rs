@@ -26,3 +26,7 @@ mod host_fit;
 /// tools/metrics_reference.py.
 #[cfg(feature = "std")]
 mod metrics_golden;
+// The `mlmap` binary run as a user runs it: every subcommand, the demo, and every
+// bad-input case (exit code, message naming the file and line, no output left behind).
+#[cfg(feature = "cli")]
+mod cli;

@@ -58,13 +58,23 @@ pub struct FitArgs {
     #[arg(long, default_value_t = 22, value_name = "N")]
     pub bins_ml: usize,
     /// Additive smoothing of the ML head.
-    #[arg(long, default_value_t = 0.0055, value_name = "X")]
+    #[arg(
+        long,
+        default_value_t = 0.0055,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
     pub lambda_ml: f32,
     /// Bins of the MAP histograms.
     #[arg(long, default_value_t = 17, value_name = "N")]
     pub bins_map: usize,
     /// Additive smoothing of the MAP head.
-    #[arg(long, default_value_t = 0.00012, value_name = "X")]
+    #[arg(
+        long,
+        default_value_t = 0.00012,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
     pub lambda_map: f32,
     /// Edge placement.
     #[arg(long, value_enum, default_value_t = Edges::Linspace)]
@@ -88,6 +98,15 @@ pub enum Objective {
     Brier,
 }
 
+/// Output format of `tune`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TuneFormat {
+    /// Aligned tables of the best candidates and a summary of the written table.
+    Text,
+    /// One JSON object: the best candidates of each head and the written table.
+    Json,
+}
+
 /// Flags of `tune`.
 #[derive(Debug, Args)]
 pub struct TuneArgs {
@@ -107,10 +126,20 @@ pub struct TuneArgs {
     #[arg(long, default_value = "4..40", value_name = "SET")]
     pub bins_map: String,
     /// Smallest lambda of the log grid (both heads).
-    #[arg(long, default_value_t = 1e-8, value_name = "X")]
+    #[arg(
+        long,
+        default_value_t = 1e-8,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
     pub lambda_min: f64,
     /// Largest lambda of the log grid (both heads).
-    #[arg(long, default_value_t = 1e-1, value_name = "X")]
+    #[arg(
+        long,
+        default_value_t = 1e-1,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
     pub lambda_max: f64,
     /// Lambdas per decade of the log grid.
     #[arg(long, default_value_t = 3, value_name = "N")]
@@ -124,6 +153,9 @@ pub struct TuneArgs {
     /// How many of the best candidates to print per head.
     #[arg(long, default_value_t = 5, value_name = "N")]
     pub top: usize,
+    /// Output format of the candidates (`json` prints them at full precision).
+    #[arg(long, value_enum, default_value_t = TuneFormat::Text)]
+    pub format: TuneFormat,
     /// The table file to write (the best candidate of each head).
     #[arg(long, short, value_name = "TABLE")]
     pub output: PathBuf,

@@ -3,8 +3,6 @@
 
 use std::path::Path;
 
-use std::fmt::Display;
-
 use mlmap::host::dataset::{DataError, DataSource, Label, Location};
 
 use crate::error::{CliError, Result};
@@ -18,17 +16,17 @@ pub fn data_error(e: DataError) -> CliError {
     }
 }
 
-/// Bad input at a position of a file, formatted like the readers' errors.
-pub fn at(path: &Path, location: Location, msg: impl Display) -> CliError {
-    match location {
-        Location::Line(l) => CliError::Input(format!("{}:{l}: {msg}", path.display())),
-        Location::Row(r) => CliError::Input(format!("{}: row index {r}: {msg}", path.display())),
-    }
-}
-
 /// Opens a data source, mapping errors.
 pub fn open(path: &Path) -> Result<DataSource> {
     DataSource::open(path).map_err(data_error)
+}
+
+/// `PATH:LINE` for a CSV line, `PATH: row index I` for an NPY row (as data errors).
+pub fn at(path: &Path, location: Location) -> String {
+    match location {
+        Location::Line(l) => format!("{}:{l}", path.display()),
+        Location::Row(r) => format!("{}: row index {r}", path.display()),
+    }
 }
 
 /// Every row of a data file.
@@ -42,8 +40,10 @@ pub struct Loaded {
     pub objectness: Vec<f64>,
     /// N x K logits, row-major.
     pub logits: Vec<f64>,
-    /// Where each row is in its file (CSV line or NPY row index), for errors.
-    pub locations: Vec<Location>,
+    /// Whether the file has labels (a `label` column or `labels.npy`).
+    pub has_labels: bool,
+    /// Where the first row without a label is, if any.
+    pub first_missing_label: Option<Location>,
 }
 
 impl Loaded {
@@ -54,21 +54,27 @@ impl Loaded {
 
     /// Labels as `Option<class>` (background → None), refusing missing labels.
     pub fn class_labels(&self, path: &Path) -> Result<Vec<Option<usize>>> {
-        self.labels
+        if !self.has_labels {
+            return Err(CliError::input(
+                path,
+                "has no labels (a `label` column or labels.npy); labelled rows are needed here",
+            ));
+        }
+        if let Some(loc) = self.first_missing_label {
+            return Err(CliError::Input(format!(
+                "{}: column \"label\": the label is empty; a class name or background \
+                 is needed here",
+                at(path, loc)
+            )));
+        }
+        Ok(self
+            .labels
             .iter()
-            .enumerate()
-            .map(|(i, l)| match l {
-                Label::Class(c) => Ok(Some(*c)),
-                Label::Background => Ok(None),
-                Label::Missing => Err(CliError::input(
-                    path,
-                    format!(
-                        "data row {}: a label is needed here (class name or background)",
-                        i + 1
-                    ),
-                )),
+            .map(|l| match l {
+                Label::Class(c) => Some(*c),
+                Label::Background | Label::Missing => None,
             })
-            .collect()
+            .collect())
     }
 
     /// Logits in the layer's precision.
@@ -90,13 +96,16 @@ pub fn load(path: &Path) -> Result<Loaded> {
         labels: Vec::new(),
         objectness: Vec::new(),
         logits: Vec::new(),
-        locations: Vec::new(),
+        has_labels: src.has_labels(),
+        first_missing_label: None,
     };
     src.for_each_row(|row| -> Result<()> {
+        if row.label == Label::Missing && d.first_missing_label.is_none() {
+            d.first_missing_label = Some(row.location());
+        }
         d.labels.push(row.label);
         d.objectness.push(row.objectness);
         d.logits.extend_from_slice(row.logits);
-        d.locations.push(row.location());
         Ok(())
     })?;
     if d.labels.is_empty() {

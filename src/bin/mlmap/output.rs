@@ -5,33 +5,74 @@ use std::path::Path;
 
 use crate::error::{CliError, Result};
 
+/// Checks that `path` can be an output file: its directory exists and `path` is not a
+/// directory. Commands call it before any long work, so a mistyped output fails fast.
+pub fn check_target(path: &Path) -> Result<()> {
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        return Err(CliError::input(path, "the output directory does not exist"));
+    }
+    if path.is_dir() {
+        return Err(CliError::input(
+            path,
+            "is a directory; the output must be a file path",
+        ));
+    }
+    Ok(())
+}
+
+/// The directory `path` is written into.
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    }
+}
+
+/// `true` when an output location refuses a write (no permission, a read-only file
+/// system, a directory where a file should go): the user's fault, exit code 2. Other
+/// I/O failures (a full disk, a device error) are the machine's, exit code 1.
+pub fn location_refused(e: &io::Error) -> bool {
+    matches!(
+        e.kind(),
+        io::ErrorKind::PermissionDenied
+            | io::ErrorKind::ReadOnlyFilesystem
+            | io::ErrorKind::IsADirectory
+            | io::ErrorKind::NotADirectory
+            | io::ErrorKind::DirectoryNotEmpty
+    )
+}
+
+/// An I/O error on the output `path`, with its exit code (see [`location_refused`]).
+fn io_error(path: &Path, what: &str, e: &io::Error) -> CliError {
+    let msg = format!("{what}: {e}");
+    if location_refused(e) {
+        CliError::input(path, msg)
+    } else {
+        CliError::internal(path, msg)
+    }
+}
+
 /// Writes `path` through `fill`: into a temporary file in the same directory, renamed
 /// into place only when everything was written. On any error the temporary file is
 /// removed and `path` is untouched.
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        return Err(CliError::input(path, "the output directory does not exist"));
-    }
+    check_target(path)?;
     let mut tmp = tempfile::Builder::new()
         .prefix(".mlmap-")
         .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(|e| CliError::internal(path, format!("cannot create a temporary file: {e}")))?;
+        .tempfile_in(parent_dir(path))
+        .map_err(|e| io_error(path, "cannot create a temporary file", &e))?;
     {
         let mut w = io::BufWriter::new(tmp.as_file_mut());
         fill(&mut w)?;
-        w.flush()
-            .map_err(|e| CliError::internal(path, format!("cannot write: {e}")))?;
+        w.flush().map_err(|e| io_error(path, "cannot write", &e))?;
     }
     tmp.as_file()
         .sync_all()
-        .map_err(|e| CliError::internal(path, format!("cannot sync: {e}")))?;
+        .map_err(|e| io_error(path, "cannot sync", &e))?;
     tmp.persist(path)
-        .map_err(|e| CliError::internal(path, format!("cannot rename into place: {}", e.error)))?;
+        .map_err(|e| io_error(path, "cannot rename into place", &e.error))?;
     Ok(())
 }
 

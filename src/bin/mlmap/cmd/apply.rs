@@ -10,6 +10,7 @@ use crate::load;
 use crate::output;
 
 pub fn run(args: &ApplyArgs) -> Result<()> {
+    output::check_target(&args.output)?;
     let (table, _) = read_table(&args.table)?;
     let src = load::open(&args.input)?;
     load::check_classes(&args.input, src.classes(), table.class_names())?;
@@ -41,7 +42,9 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
                 *d = s as f32;
             }
             let os = row.objectness as f32;
-            let at = |e: mlmap::InferError| load::at(&args.input, row.location(), e);
+            let at = |e: mlmap::InferError| {
+                CliError::Input(format!("{}: {e}", load::at(&args.input, row.location())))
+            };
             table.ml_into(&x, os, &mut ml, &mut scratch).map_err(at)?;
             table
                 .map_into::<Libm>(&x, os, &mut map, &mut scratch)

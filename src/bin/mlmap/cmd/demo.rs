@@ -79,6 +79,11 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         path("test.csv"),
         path("ood.csv"),
     );
+    // Every input is read and checked before anything is written.
+    let train = TrainingSet::read(&load::open(&train_p)?).map_err(|e| fit_error(&train_p, e))?;
+    let val = load::load(&val_p)?;
+    let test = load::load(&test_p)?;
+    let ood = load::load(&ood_p)?;
     std::fs::create_dir_all(&a.output)
         .map_err(|e| CliError::input(&a.output, format!("cannot create: {e}")))?;
     let mut log = String::new();
@@ -89,15 +94,15 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     );
 
     // 1. Fit with the authors' detection settings.
-    let train = TrainingSet::read(&load::open(&train_p)?).map_err(fit_error)?;
-    let fitted = train.fit(&FitParams::default()).map_err(fit_error)?;
+    let fitted = train
+        .fit(&FitParams::default())
+        .map_err(|e| fit_error(&train_p, e))?;
     let fitted_path = a.output.join("fitted.mlmap");
     let size = write_table(&fitted_path, &fitted)?;
     let _ = writeln!(log, "1. fit (authors' detection settings)");
     log.push_str(&summary(&fitted_path, &fitted, size));
 
     // 2. Tune both lambdas on the validation set at the firmware's shape.
-    let val = load::load(&val_p)?;
     let grid = Grid {
         bins_ml: vec![22],
         bins_map: vec![17],
@@ -125,8 +130,6 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     log.push_str(&summary(&tuned_path, &tuned, size));
 
     // 3. Evaluate the five methods.
-    let test = load::load(&test_p)?;
-    let ood = load::load(&ood_p)?;
     let config = MetricsConfig::default();
     let ev = eval::evaluate(&Inputs {
         table: &tuned,

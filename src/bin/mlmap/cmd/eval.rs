@@ -225,7 +225,12 @@ impl Evaluation {
             bins,
             Some(table),
         )
-        .map_err(|e| CliError::Internal(e.to_string()))?;
+        .map_err(|e| match &e {
+            plots::PlotError::Io { source, .. } if output::location_refused(source) => {
+                CliError::Input(e.to_string())
+            }
+            _ => CliError::Internal(e.to_string()),
+        })?;
         Ok(written.len())
     }
 }

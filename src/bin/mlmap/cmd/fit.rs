@@ -11,12 +11,29 @@ use crate::cmd::inspect::{edge_mode_name, tail_name};
 use crate::error::{CliError, Result};
 use crate::{load, output};
 
-/// Maps a fit error to exit code 2 (bad input) or 1.
-pub fn fit_error(e: FitError) -> CliError {
+/// Maps an error of fitting on the training data `train` to exit code 2 (bad input)
+/// or 1, naming `train` when the error does not name a file itself, and naming a
+/// parameter by its flag.
+pub fn fit_error(train: &Path, e: FitError) -> CliError {
+    let msg = match &e {
+        FitError::Param {
+            name,
+            value,
+            expected,
+        } => format!(
+            "--{} {value} is out of range: expected {expected}",
+            name.replace('_', "-")
+        ),
+        FitError::Data(_)
+        | FitError::NoLabels { .. }
+        | FitError::EmptyClasses { .. }
+        | FitError::Changed { .. } => e.to_string(),
+        _ => format!("{}: {e}", train.display()),
+    };
     if e.is_bad_input() {
-        CliError::Input(e.to_string())
+        CliError::Input(msg)
     } else {
-        CliError::Internal(e.to_string())
+        CliError::Internal(msg)
     }
 }
 
@@ -67,9 +84,11 @@ pub fn run(args: &FitArgs) -> Result<()> {
         edges: super::edge_mode(args.edges),
         upper_tail: super::upper_tail(args.upper_tail),
     };
-    params.validate().map_err(fit_error)?;
-    let src = load::open(&args.train)?;
-    let table = fit::fit(&src, &params).map_err(fit_error)?;
+    let train = &args.train;
+    params.validate().map_err(|e| fit_error(train, e))?;
+    output::check_target(&args.output)?;
+    let src = load::open(train)?;
+    let table = fit::fit(&src, &params).map_err(|e| fit_error(train, e))?;
     let size = write_table(&args.output, &table)?;
     output::print(&summary(&args.output, &table, size))
 }

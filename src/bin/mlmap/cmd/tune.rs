@@ -4,12 +4,12 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use mlmap::host::fit::{build_table, TrainingSet};
-use mlmap::host::tune::{self, Candidate, Objective, TuneResult, ValRows};
+use mlmap::host::fit::{build_table, FitError, TrainingSet};
+use mlmap::host::tune::{self, Candidate, Objective, TuneError, TuneResult, ValRows};
 use mlmap::host::DynTable;
 use mlmap::{EdgeMode, Gaussian, Histogram, Settings, UpperTail};
 
-use crate::args::{self, TuneArgs};
+use crate::args::{self, TuneArgs, TuneFormat};
 use crate::cmd::fit::{fit_error, summary, write_table};
 use crate::error::{CliError, Result};
 use crate::load::{self, Loaded};
@@ -46,6 +46,13 @@ pub fn search(
     let names: Vec<&str> = train.moments().iter().map(|m| m.name()).collect();
     load::check_classes(val_path, &val.classes, names.iter().copied())?;
     let labels = val.class_labels(val_path)?;
+    if grid.objective == Objective::Nll && labels.iter().all(Option::is_none) {
+        return Err(CliError::input(
+            val_path,
+            "no row is labelled with a class: the nll objective is undefined \
+             (choose --objective ece or brier)",
+        ));
+    }
     let logits = val.logits_f32();
     let objectness = val.objectness_f32();
     let rows = ValRows {
@@ -58,8 +65,9 @@ pub fn search(
         .moments()
         .iter()
         .map(|m| {
-            Gaussian::new(m.mean() as f32, m.prior_variance() as f32).map_err(|e| {
-                CliError::input(train.path(), format!("class {}: prior {e:?}", m.name()))
+            Gaussian::new(m.mean() as f32, m.prior_variance() as f32).map_err(|_| {
+                let class = m.name().to_string();
+                fit_error(train.path(), FitError::OutOfF32 { class })
             })
         })
         .collect::<Result<Vec<_>>>()?;
@@ -96,7 +104,11 @@ pub fn search(
         grid.detail,
         |done, _| bar.set_position(done as u64),
     )
-    .map_err(|e| CliError::input(val_path, e))?;
+    .map_err(|e| match e {
+        TuneError::BadValidationSet(_) => CliError::input(val_path, e),
+        TuneError::Histogram(_) => CliError::input(train.path(), e),
+        TuneError::EmptyGrid => CliError::Input(format!("tune: {e}")),
+    })?;
     bar.finish_and_clear();
     let (best_ml, best_map) = match (result.ml.first(), result.map.first()) {
         (Some(a), Some(b)) => (*a, *b),
@@ -104,17 +116,18 @@ pub fn search(
     };
     let ml = train
         .histograms(best_ml.bins, grid.edges)
-        .map_err(fit_error)?;
+        .map_err(|e| fit_error(train.path(), e))?;
     let map = train
         .histograms(best_map.bins, grid.edges)
-        .map_err(fit_error)?;
+        .map_err(|e| fit_error(train.path(), e))?;
     let settings = Settings {
         lambda_ml: best_ml.lambda,
         lambda_map: best_map.lambda,
         edge_mode: grid.edges,
         upper_tail: grid.tail,
     };
-    let table = build_table(train.moments(), &ml, &map, settings).map_err(fit_error)?;
+    let table = build_table(train.moments(), &ml, &map, settings)
+        .map_err(|e| fit_error(train.path(), e))?;
     Ok((result, table))
 }
 
@@ -162,6 +175,44 @@ pub fn render(
     s
 }
 
+/// The best `top` candidates of each head as one JSON object, values at full precision.
+pub fn render_json(
+    result: &TuneResult,
+    objective: Objective,
+    top: usize,
+    n_candidates: (usize, usize),
+    table_path: &Path,
+    table_bytes: usize,
+) -> String {
+    let head = |cands: &[Candidate]| -> Vec<serde_json::Value> {
+        cands
+            .iter()
+            .take(top)
+            .enumerate()
+            .map(|(i, c)| {
+                serde_json::json!({
+                    "rank": i + 1,
+                    "bins": c.bins,
+                    "lambda": c.lambda,
+                    "ece": c.ece,
+                    "nll": c.nll,
+                    "brier": c.brier,
+                })
+            })
+            .collect()
+    };
+    let v = serde_json::json!({
+        "objective": objective_name(objective),
+        "candidates": { "ml": n_candidates.0, "map": n_candidates.1 },
+        "ml": head(&result.ml),
+        "map": head(&result.map),
+        "table": { "path": table_path.display().to_string(), "bytes": table_bytes },
+    });
+    let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
+    s.push('\n');
+    s
+}
+
 pub fn run(a: &TuneArgs) -> Result<()> {
     let bins_ml =
         tune::parse_bins(&a.bins_ml).map_err(|e| CliError::Input(format!("--bins-ml: {e}")))?;
@@ -182,7 +233,8 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         tail: super::upper_tail(a.upper_tail),
         detail: a.top,
     };
-    let train = TrainingSet::read(&load::open(&a.train)?).map_err(fit_error)?;
+    output::check_target(&a.output)?;
+    let train = TrainingSet::read(&load::open(&a.train)?).map_err(|e| fit_error(&a.train, e))?;
     let val = load::load(&a.val)?;
     let (result, table) = search(&train, &val, &a.val, &grid)?;
     let size = write_table(&a.output, &table)?;
@@ -190,7 +242,13 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         grid.bins_ml.len() * grid.lambdas.len(),
         grid.bins_map.len() * grid.lambdas.len(),
     );
-    let mut text = render(&result, grid.objective, a.top, n);
-    text.push_str(&summary(&a.output, &table, size));
+    let text = match a.format {
+        TuneFormat::Text => {
+            let mut text = render(&result, grid.objective, a.top, n);
+            text.push_str(&summary(&a.output, &table, size));
+            text
+        }
+        TuneFormat::Json => render_json(&result, grid.objective, a.top, n, &a.output, size),
+    };
     output::print(&text)
 }
