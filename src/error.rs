@@ -148,7 +148,8 @@ pub enum DecodeError {
         found: (u16, u16, u16),
     },
     /// The checksum matched, but the body does not follow the format (a field is
-    /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over).
+    /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over, a
+    /// varint is not in its shortest form).
     Malformed,
     /// The body parsed, but a table invariant does not hold.
     Invalid(TableError),
