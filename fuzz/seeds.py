@@ -12,6 +12,9 @@ infer:     detections on the shipped table (rows of examples/data/test.csv, NaN,
            subnormals, bin edges, objectness at and beyond its bounds) and on a small
            structured table, in the `arbitrary` layout of the target.
 
+Files named `regression_*` are inputs the fuzzers once failed on; they are kept by hand,
+not written here.
+
 The `arbitrary` layout (arbitrary 1.x): integers little-endian; a derived enum reads a
 u32 `v` and picks variant `(v * count) >> 32`; `bool` is one byte's low bit; fixed
 arrays and struct fields follow in order.

@@ -136,13 +136,15 @@ pub(crate) fn ml_into<F: AsRef<[f32]>>(
     suffix: &mut [f32],
 ) -> Result<(), InferError> {
     check(logits, objectness, hists.len(), out.len())?;
-    let mut evidence = false;
+    // The sum of the K likelihoods is > 0 exactly when one of them is (they are finite,
+    // >= 0, and at most 1 each); a sum is cheaper than a flag.
+    let mut evidence = 0.0f32;
     for ((o, h), &x) in out.iter_mut().zip(hists).zip(logits) {
         let l = h.likelihood(x, tail);
-        evidence |= l > 0.0;
+        evidence += l;
         *o = l + lambda;
     }
-    if evidence {
+    if evidence > 0.0 {
         normalise(out, suffix, objectness);
     } else {
         uniform(out, objectness);
@@ -164,14 +166,16 @@ pub(crate) fn map_into<F: AsRef<[f32]>, M: Backend>(
     suffix: &mut [f32],
 ) -> Result<(), InferError> {
     check(logits, objectness, hists.len(), out.len())?;
-    let mut evidence = false;
+    // As in `ml_into`; each `L * P` is at most the largest prior density (about 1e19
+    // for the smallest variance a table accepts), so the sum of K of them is finite.
+    let mut evidence = 0.0f32;
     for (((o, h), g), &x) in out.iter_mut().zip(hists).zip(priors).zip(logits) {
         let l = h.likelihood(x, tail);
         let lp = if l > 0.0 { l * g.pdf::<M>(x) } else { 0.0 };
-        evidence |= lp > 0.0;
+        evidence += lp;
         *o = lp + lambda;
     }
-    if evidence {
+    if evidence > 0.0 {
         normalise(out, suffix, objectness);
     } else {
         uniform(out, objectness);
