@@ -67,6 +67,7 @@ impl Format for InferError {
             Self::NanLogit { class } => write!(f, "NanLogit({})", class),
             Self::Objectness => write!(f, "Objectness"),
             Self::Length => write!(f, "Length"),
+            Self::Evidence => write!(f, "Evidence"),
         }
     }
 }

@@ -83,6 +83,8 @@ impl DynTable {
         {
             return Err(DecodeError::Malformed);
         }
+        let shape = (header.k, header.bins_ml, header.bins_map);
+        wire::check_canonical(bytes.len(), shape, &t.settings, |i| t.spec(i))?;
         Ok(t)
     }
 

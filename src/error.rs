@@ -148,7 +148,8 @@ pub enum DecodeError {
         found: (u16, u16, u16),
     },
     /// The checksum matched, but the body does not follow the format (a field is
-    /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over).
+    /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over, a
+    /// varint is not in its shortest form).
     Malformed,
     /// The body parsed, but a table invariant does not hold.
     Invalid(TableError),
@@ -222,6 +223,8 @@ pub enum InferError {
     Objectness,
     /// The logit slice or the output slice does not have one entry per class.
     Length,
+    /// Evidence or lambda given to `scores_from_evidence` is out of range.
+    Evidence,
 }
 
 impl fmt::Display for InferError {
@@ -230,6 +233,9 @@ impl fmt::Display for InferError {
             Self::NanLogit { class } => write!(f, "logit of class {class} is NaN"),
             Self::Objectness => f.write_str("objectness is NaN or outside [0, 1]"),
             Self::Length => f.write_str("logits or output do not have one entry per class"),
+            Self::Evidence => {
+                f.write_str("evidence is not finite and >= 0, or lambda is out of range")
+            }
         }
     }
 }

@@ -157,8 +157,16 @@ impl<F: AsRef<[f32]>> Histogram<F> {
         } else if k >= self.bins() {
             self.hi
         } else {
-            self.lo + (k as f32) * self.width
+            self.inner_edge(k)
         }
+    }
+
+    /// `lo + k * w`: edge `e_k` for `0 < k < B`, and a value equal to `e_0` for `k = 0`
+    /// (`0 * w` is 0, and `lo + 0` compares equal to `lo`). `k < B <= u16::MAX`, so the
+    /// conversion through `u32` is exact and cheaper than one from `usize`.
+    #[inline(always)]
+    fn inner_edge(&self, k: usize) -> f32 {
+        self.lo + (k as u32 as f32) * self.width
     }
 
     /// The bin containing `x` under numpy's rule, or `None` outside `[e_0, e_B]`
@@ -172,18 +180,41 @@ impl<F: AsRef<[f32]>> Histogram<F> {
         if !(x >= self.lo && x <= self.hi) {
             return None;
         }
+        Some(self.bin_in_support(x))
+    }
+
+    /// The bin of `x`, for `lo <= x <= hi`.
+    #[inline(always)]
+    fn bin_in_support(&self, x: f32) -> usize {
+        /// `1.5 * 2^23`: sums with it in `[2^23, 2^24)` are rounded to integers.
+        const ROUNDER: f32 = 12_582_912.0;
         let last = self.bins() - 1;
-        // Estimate, then correct against the true edges. The estimate is off by at most
-        // one bin for validated tables; the loops make the result exact regardless.
+        // Estimate `floor(t)`, then correct against the true edges. The estimate is off
+        // by at most one bin for validated tables; the corrections make the result exact
+        // regardless. `0 <= t <= B (1 + eps)`, far below 2^22, so `t - 0.5 + ROUNDER`
+        // is an integer-valued f32 equal to `ROUNDER + round(t - 0.5)`: `kf` is the
+        // estimate as an exact f32 and `k` as an integer, without float-int conversions.
         let t = (x - self.lo) * self.inv_width;
-        let mut k = if t < last as f32 { t as usize } else { last };
-        while k > 0 && x < self.edge(k) {
-            k -= 1;
-        }
-        while k < last && x >= self.edge(k + 1) {
+        let r = t - 0.5 + ROUNDER;
+        let cap = ROUNDER + last as u32 as f32;
+        let r = if r < cap { r } else { cap };
+        let kf = r - ROUNDER;
+        let mut k = r.to_bits().saturating_sub(ROUNDER.to_bits()) as usize;
+        // `kf` is `k as f32` and `lo + kf * w` is `edge(k)` for 1 <= k <= last (and
+        // compares equal to it for k = 0). After a step down `x < e_(k+1)` holds, so at
+        // most one direction ever moves.
+        if x < self.lo + kf * self.width {
+            k = k.saturating_sub(1);
+            while k > 0 && x < self.inner_edge(k) {
+                k -= 1;
+            }
+        } else if k < last && x >= self.lo + (kf + 1.0) * self.width {
             k += 1;
+            while k < last && x >= self.inner_edge(k + 1) {
+                k += 1;
+            }
         }
-        Some(k)
+        k
     }
 
     /// The likelihood `L` of `x`: the frequency of its bin, 0 outside the support, with
@@ -194,15 +225,14 @@ impl<F: AsRef<[f32]>> Histogram<F> {
     /// Never.
     #[inline]
     pub fn likelihood(&self, x: f32, tail: UpperTail) -> f32 {
-        let bin = if x > self.hi && tail == UpperTail::Clamp {
-            Some(self.bins() - 1)
+        let k = if x >= self.lo && x <= self.hi {
+            self.bin_in_support(x)
+        } else if x > self.hi && tail == UpperTail::Clamp {
+            self.bins() - 1
         } else {
-            self.bin(x)
+            return 0.0;
         };
-        match bin {
-            Some(k) => self.freqs.as_ref().get(k).copied().unwrap_or(0.0),
-            None => 0.0,
-        }
+        self.freqs.as_ref().get(k).copied().unwrap_or(0.0)
     }
 }
 
@@ -265,6 +295,45 @@ mod tests {
                 }
             }
             assert_eq!(h.bin(hi), Some(n - 1));
+        }
+    }
+
+    /// The bin by definition: the last `k` with `e_k <= x`, the last bin closed.
+    fn bin_by_scan<F: AsRef<[f32]>>(h: &Histogram<F>, x: f32) -> Option<usize> {
+        if !(x >= h.lo() && x <= h.hi()) {
+            return None;
+        }
+        (0..h.bins()).rev().find(|&k| x >= h.edge(k))
+    }
+
+    #[test]
+    fn bin_matches_the_definition_near_every_edge() {
+        // Bins of one or two ulps (the estimate is then often off), wide and narrow
+        // supports, supports straddling 0, and negative ones.
+        let cases: &[(f32, f32, usize)] = &[
+            (1.0e6, 1.0e6 + 22.0 * 0.0625, 22),
+            (1.0e6, 1.0e6 + 17.0 * 0.125 - 0.0625, 17),
+            (-1.0e6 - 1.5, -1.0e6, 22),
+            (-3.7, 9.1, 22),
+            (-0.123_2, 9.392_4, 22),
+            (-7.064_5, 6.911_1, 17),
+            (-1.0e-30, 1.0e-30, 17),
+            (0.0, 1.0, 1),
+            (-2.0, 65_534.0, 65_535),
+        ];
+        for &(lo, hi, n) in cases {
+            let h = Histogram::new(lo, hi, std::vec![1.0 / n as f32; n]).unwrap();
+            let step = (n / 200).max(1);
+            for k in (0..=n).step_by(step).chain([n]) {
+                let mut x = h.edge(k);
+                for _ in 0..4 {
+                    x = x.next_down();
+                }
+                for _ in 0..9 {
+                    assert_eq!(h.bin(x), bin_by_scan(&h, x), "{lo}..{hi} / {n}: x = {x}");
+                    x = x.next_up();
+                }
+            }
         }
     }
 

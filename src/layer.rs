@@ -8,8 +8,9 @@
 //! s_i    = OS * a_i / sum_j a_j
 //! ```
 //!
-//! The normalisation first divides every mass by the largest one, `b_i = a_i / max_j a_j`
-//! (so `b_i` is in `(0, 1]`, exactly 1 for the largest), then evaluates
+//! The normalisation first scales every mass by the largest one,
+//! `b_i = a_i * (1 / max_j a_j)` (each operation rounded; so `b_i` is in `(0, 1]`, and
+//! exactly 1 for the largest), then evaluates
 //! `s_i = OS / (1 + R_i / b_i)` with `R_i = sum_{j<i} b_j + sum_{j>i} b_j`, the other
 //! classes' mass. Raising `a_i` either leaves the maximum alone (then `R_i` is
 //! unchanged and `b_i` grows) or raises it (then `b_i = 1` and every other `b_j`, so
@@ -103,15 +104,29 @@ pub(crate) fn check(
     Ok(())
 }
 
+/// Masses below this are scaled up by [`TWO_POW_64`] first, so `1 / max` cannot overflow.
+const TINY_MAX: f32 = f32::from_bits(0x0d80_0000); // 2^-100
+/// An exact scale factor (a power of two).
+const TWO_POW_64: f32 = f32::from_bits(0x5f80_0000); // 2^64
+
 /// Turns the unnormalised masses in `a` (each finite and > 0) into scores summing to
 /// `objectness`; see the module docs. `suffix` is scratch space of the same length.
 #[inline]
 fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
-    let max = a.iter().copied().fold(0.0f32, f32::max);
-    if max > 0.0 {
+    let mut max = a.iter().copied().fold(0.0f32, f32::max);
+    if max < TINY_MAX {
+        // Exact: a power of two, and every product stays far below f32::MAX.
         for v in a.iter_mut() {
-            *v /= max;
+            *v *= TWO_POW_64;
         }
+        max *= TWO_POW_64;
+    }
+    // b_j = a_j / max as one rounded product with the rounded reciprocal (one division
+    // instead of K); the largest masses are exactly 1. The map a_j -> b_j is monotone in
+    // a_j and, for a_j < max, in 1 / max, and never exceeds 1.
+    let inv = 1.0 / max;
+    for v in a.iter_mut() {
+        *v = if *v >= max { 1.0 } else { *v * inv };
     }
     let mut acc = 0.0f32;
     for (s, &v) in suffix.iter_mut().zip(a.iter()).rev() {
@@ -180,7 +195,9 @@ pub(crate) fn map_into<F: AsRef<[f32]>, M: Backend>(
 /// # Errors
 ///
 /// [`InferError::Length`] when the slices differ in length or are empty;
-/// [`InferError::Objectness`] for an objectness outside `[0, 1]`.
+/// [`InferError::Evidence`] for a lambda outside `(0, MAX_LAMBDA]` or evidence that is
+/// negative, above `1e30` or not finite; [`InferError::Objectness`] for an objectness
+/// outside `[0, 1]`.
 ///
 /// # Panics
 ///
@@ -195,6 +212,10 @@ pub fn scores_from_evidence(
     let k = evidence.len();
     if k == 0 || out.len() != k || scratch.len() != k {
         return Err(InferError::Length);
+    }
+    let finite = |v: f32| v.is_finite() && v >= 0.0 && v <= 1e30;
+    if !(lambda > 0.0 && lambda <= crate::MAX_LAMBDA && evidence.iter().all(|&e| finite(e))) {
+        return Err(InferError::Evidence);
     }
     if !(0.0..=1.0).contains(&objectness) {
         return Err(InferError::Objectness);

@@ -122,7 +122,9 @@ impl<const K: usize, const B_ML: usize, const B_MAP: usize> Table<K, B_ML, B_MAP
     /// * [`DecodeError::Corrupted`]: CRC-32 mismatch.
     /// * [`DecodeError::UnsupportedVersion`]: another format version.
     /// * [`DecodeError::ShapeMismatch`]: another `K` or bin count.
-    /// * [`DecodeError::Malformed`]: the body does not parse, or bytes are left over.
+    /// * [`DecodeError::Malformed`]: the body does not parse, bytes are left over, or a
+    ///   length is not written in its shortest form (so that every table has exactly one
+    ///   encoding, the one [`Table::to_slice`] writes).
     /// * [`DecodeError::Invalid`]: an invariant does not hold.
     ///
     /// # Panics
@@ -163,6 +165,7 @@ impl<const K: usize, const B_ML: usize, const B_MAP: usize> Table<K, B_ML, B_MAP
             table.set_class(i, spec.validate(i, B_ML, B_MAP)?);
         }
         wire::check_unique_names(&table.names)?;
+        wire::check_canonical(bytes.len(), Self::SHAPE, &table.settings, |i| table.spec(i))?;
         Ok(table)
     }
 

@@ -319,10 +319,52 @@ where
 }
 
 #[derive(Serialize)]
-struct MessageRef<'s, C> {
+struct MessageRef<C> {
     header: Header,
     settings: SettingsWire,
-    classes: &'s C,
+    classes: C,
+}
+
+/// One class on the wire, borrowed from a validated table.
+type ClassView<'a> = ClassWire<'a, &'a [f32], &'a [f32]>;
+
+/// The message [`encode`] writes, before the CRC.
+fn message<'a, F>(
+    shape: (u16, u16, u16),
+    settings: &Settings,
+    class: F,
+) -> MessageRef<ClassSeq<impl Fn(usize) -> Option<ClassView<'a>>>>
+where
+    F: Fn(usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>>,
+{
+    MessageRef {
+        header: Header {
+            magic: MAGIC,
+            version: FORMAT_VERSION,
+            k: shape.0,
+            bins_ml: shape.1,
+            bins_map: shape.2,
+        },
+        settings: SettingsWire::from_settings(settings),
+        classes: ClassSeq {
+            k: usize::from(shape.0),
+            class: move |i| {
+                let c = class(i)?;
+                Some(ClassWire {
+                    name: c.name,
+                    rows: c.rows,
+                    mean: c.mean,
+                    variance: c.variance,
+                    ml_lo: c.ml_range.0,
+                    ml_hi: c.ml_range.1,
+                    ml_freqs: c.ml_freqs,
+                    map_lo: c.map_range.0,
+                    map_hi: c.map_range.1,
+                    map_freqs: c.map_freqs,
+                })
+            },
+        },
+    }
 }
 
 /// Encodes a validated table given by its shape, settings and a per-class view.
@@ -335,36 +377,31 @@ pub(crate) fn encode<'a, 'b, F>(
 where
     F: Fn(usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>>,
 {
-    let classes = ClassSeq {
-        k: usize::from(shape.0),
-        class: |i| {
-            let c = class(i)?;
-            Some(ClassWire {
-                name: c.name,
-                rows: c.rows,
-                mean: c.mean,
-                variance: c.variance,
-                ml_lo: c.ml_range.0,
-                ml_hi: c.ml_range.1,
-                ml_freqs: c.ml_freqs,
-                map_lo: c.map_range.0,
-                map_hi: c.map_range.1,
-                map_freqs: c.map_freqs,
-            })
-        },
-    };
-    let msg = MessageRef {
-        header: Header {
-            magic: MAGIC,
-            version: FORMAT_VERSION,
-            k: shape.0,
-            bins_ml: shape.1,
-            bins_map: shape.2,
-        },
-        settings: SettingsWire::from_settings(settings),
-        classes: &classes,
-    };
+    let msg = message(shape, settings, class);
     postcard::to_slice_crc32(&msg, buf, CRC.digest()).map_err(|_| EncodeError::BufferTooSmall)
+}
+
+/// Checks that a decoded table came from exactly the bytes [`encode`] writes for it:
+/// postcard reads a varint written in more bytes than needed (`0x84 0x00` for 4), and
+/// such a non-canonical input would decode to a table whose encoding differs. Only the
+/// lengths need comparing: every other field has a fixed size and decodes losslessly,
+/// and an overlong varint only ever adds bytes. Measures, writes nothing.
+pub(crate) fn check_canonical<'a, F>(
+    len: usize,
+    shape: (u16, u16, u16),
+    settings: &Settings,
+    class: F,
+) -> Result<(), DecodeError>
+where
+    F: Fn(usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>>,
+{
+    let msg = message(shape, settings, class);
+    let size = postcard::serialize_with_flavor(&msg, postcard::ser_flavors::Size::default())
+        .map_err(|_| DecodeError::Malformed)?;
+    if size.checked_add(CRC_LEN) != Some(len) {
+        return Err(DecodeError::Malformed);
+    }
+    Ok(())
 }
 
 /// Bytes a postcard varint needs for `n`.
@@ -392,4 +429,48 @@ pub const fn max_encoded_len(k: usize, bins_ml: usize, bins_map: usize) -> usize
         + 4 * 2 + varint_len(bins_ml) + 4 * bins_ml
         + 4 * 2 + varint_len(bins_map) + 4 * bins_map;
     header + settings + varint_len(k) + k * per_class + CRC_LEN
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::vec::Vec;
+
+    /// The shipped table with the first class's row count rewritten as an overlong
+    /// varint (one byte more than needed) and the CRC recomputed.
+    fn overlong_rows() -> Vec<u8> {
+        let bytes = include_bytes!("../tables/default.mlmap");
+        // magic, version/K/bins (one byte each), settings, K, name length, "car", rows.
+        let rows_at = 4 + 4 + 10 + 1 + 1 + 3;
+        assert_eq!(&bytes[rows_at - 3..rows_at], b"car");
+        let len = bytes[rows_at..].iter().position(|b| b & 0x80 == 0).unwrap() + 1;
+        let mut out = bytes[..rows_at + len - 1].to_vec();
+        out.push(bytes[rows_at + len - 1] | 0x80);
+        out.push(0x00);
+        out.extend_from_slice(&bytes[rows_at + len..bytes.len() - CRC_LEN]);
+        let crc = CRC.checksum(&out);
+        out.extend_from_slice(&crc.to_le_bytes());
+        out
+    }
+
+    /// Found by the `decode` fuzz target: a varint written in more bytes than needed
+    /// decoded to a table whose own encoding is different (two files for one table).
+    #[test]
+    fn non_canonical_varint_is_rejected() {
+        let bytes = include_bytes!("../tables/default.mlmap");
+        let table = crate::Table::<3, 22, 17>::from_bytes(bytes).unwrap();
+        let mut buf = [0u8; crate::Table::<3, 22, 17>::MAX_ENCODED_LEN];
+        assert_eq!(table.to_slice(&mut buf).unwrap(), &bytes[..]);
+        let overlong = overlong_rows();
+        assert_eq!(overlong.len(), bytes.len() + 1);
+        assert_eq!(
+            crate::Table::<3, 22, 17>::from_bytes(&overlong),
+            Err(DecodeError::Malformed)
+        );
+        #[cfg(feature = "std")]
+        assert_eq!(
+            crate::host::DynTable::from_bytes(&overlong),
+            Err(DecodeError::Malformed)
+        );
+    }
 }

@@ -1,0 +1,79 @@
+//! Runs N detections (or N table decodings) of one kind, for counting instructions with
+//! valgrind: `tools/callgrind_counts.sh` runs it for N and 2N and reports the
+//! difference divided by N, so the fixed cost (start-up, reading the rows) cancels.
+//!
+//! ```text
+//! cargo run --release --features micromath --example instr_count -- map 16384
+//! ```
+//!
+//! Kinds: `sigmoid`, `softmax`, `ml`, `map`, `map_fast`, `decode`, and `noop` (a layer
+//! that only copies the logits: the cost of the loop around the layer). The detections are
+//! the first 4096 rows of `examples/data/test.csv`, cycled in file order; use an N that
+//! is a multiple of 4096 so N and 2N see the same mix of rows.
+
+use std::hint::black_box;
+use std::process::ExitCode;
+
+use mlmap::baseline::{sigmoid, softmax};
+use mlmap::{FastMath, InferError, Libm, Scores, Table};
+
+type Shipped = Table<3, 22, 17>;
+
+const TABLE: &[u8] = include_bytes!("../tables/default.mlmap");
+const TEST_CSV: &str = include_str!("data/test.csv");
+const ROWS: usize = 4096;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
+        eprintln!("usage: instr_count noop|sigmoid|softmax|ml|map|map_fast|decode N");
+        return ExitCode::from(2);
+    };
+    let table = Shipped::from_bytes(TABLE).expect("the shipped table decodes");
+    let (xs, os) = detections(&table);
+    let layer: fn(&Shipped, &[f32; 3], f32) -> Result<Scores<3>, InferError> = match kind.as_str() {
+        "noop" => |_, x, _| Ok(Scores(*x)),
+        "sigmoid" => |_, x, o| sigmoid::<Libm, 3>(x, o),
+        "softmax" => |_, x, o| softmax::<Libm, 3>(x, o),
+        "ml" => |t, x, o| t.ml(x, o),
+        "map" => |t, x, o| t.map(x, o),
+        "map_fast" => |t, x, o| t.map_with::<FastMath>(x, o),
+        "decode" => {
+            let mut ok = 0usize;
+            for _ in 0..n {
+                ok += usize::from(Shipped::from_bytes(black_box(TABLE)).is_ok());
+            }
+            println!("{kind} x {n}: {ok} decoded");
+            return ExitCode::SUCCESS;
+        }
+        other => {
+            eprintln!("unknown kind {other:?}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut checksum = 0.0f64;
+    for i in 0..n {
+        let r = i % ROWS;
+        let s = layer(black_box(&table), black_box(&xs[r]), black_box(os[r]));
+        checksum += f64::from(black_box(s).map(|s| s.0[0]).unwrap_or(0.0));
+    }
+    println!("{kind} x {n}: checksum {checksum}");
+    ExitCode::SUCCESS
+}
+
+/// The logits (in the table's class order) and objectness of the first rows.
+fn detections(table: &Shipped) -> (Vec<[f32; 3]>, Vec<f32>) {
+    let mut lines = TEST_CSV.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect("column");
+    let logit_cols: [usize; 3] = core::array::from_fn(|i| col(table.class_name(i).expect("class")));
+    let os_col = col("objectness");
+    let (mut xs, mut os) = (Vec::new(), Vec::new());
+    for line in lines.take(ROWS) {
+        let f: Vec<&str> = line.split(',').collect();
+        let num = |c: usize| f[c].parse::<f32>().expect("number");
+        xs.push(logit_cols.map(num));
+        os.push(num(os_col));
+    }
+    (xs, os)
+}

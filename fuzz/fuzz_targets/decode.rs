@@ -1,0 +1,70 @@
+//! Any bytes either fail to decode or give a table that satisfies every table invariant
+//! of DESIGN §1.3 (5) and re-encodes to the very same bytes (DESIGN §3).
+//!
+//! Three fixed shapes and the run-time shaped host table are tried, on the input as
+//! given and on the input with its last four bytes replaced by a valid CRC-32 (without
+//! that, almost every mutation would stop at the checksum).
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use mlmap::host::DynTable;
+use mlmap::{DecodeError, Table};
+use mlmap_fuzz::{check_dyn_table, check_encoding, check_table, with_valid_crc};
+
+fuzz_target!(|data: &[u8]| {
+    decode_all(data);
+    if let Some(fixed) = with_valid_crc(data) {
+        decode_all(&fixed);
+    }
+});
+
+fn decode_all(bytes: &[u8]) {
+    let dynt = DynTable::from_bytes(bytes);
+    if let Ok(d) = &dynt {
+        check_dyn_table(d);
+        assert_eq!(
+            d.to_vec().expect("encodes"),
+            bytes,
+            "DynTable re-encodes differently"
+        );
+    }
+    let shape = dynt
+        .as_ref()
+        .ok()
+        .map(|d| (d.k(), d.bins_ml(), d.bins_map()));
+    decode_as::<3, 22, 17>(bytes, &dynt, shape);
+    decode_as::<2, 4, 3>(bytes, &dynt, shape);
+    decode_as::<2, 1, 1>(bytes, &dynt, shape);
+}
+
+fn decode_as<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    bytes: &[u8],
+    dynt: &Result<DynTable, DecodeError>,
+    dyn_shape: Option<(usize, usize, usize)>,
+) {
+    let r = Table::<K, B_ML, B_MAP>::from_bytes(bytes);
+    // Errors are values with a message, never a panic.
+    if let Err(e) = &r {
+        assert!(!e.to_string().is_empty());
+    }
+    // Host and device accept exactly the same tables of this shape.
+    let this_shape = dyn_shape == Some((K, B_ML, B_MAP));
+    assert_eq!(
+        r.is_ok(),
+        this_shape,
+        "Table<{K},{B_ML},{B_MAP}>: {:?}, DynTable: {:?}",
+        r.as_ref().err(),
+        dynt.as_ref().err()
+    );
+    if let Ok(t) = r {
+        check_table(&t);
+        check_encoding(&t, Some(bytes));
+        if let Ok(d) = dynt {
+            assert_eq!(
+                *d,
+                DynTable::from_table(&t),
+                "DynTable decodes other statistics"
+            );
+        }
+    }
+}

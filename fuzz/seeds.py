@@ -1,0 +1,275 @@
+#!/usr/bin/env python3
+"""Writes the committed seed corpora under fuzz/corpus/seed_<target>/.
+
+    python3 fuzz/seeds.py
+
+decode:    the shipped table, truncations of it, and small tables of the other shapes the
+           target decodes (written with the independent encoder in tools/mlmap_ref.py).
+roundtrip: the shipped table's statistics and a small table, in the `arbitrary` layout
+           of the target's `Input`.
+csv:       the example of DESIGN §2, the head of examples/data/test.csv, malformed files.
+infer:     detections on the shipped table (rows of examples/data/test.csv, NaN, ±inf,
+           subnormals, bin edges, objectness at and beyond its bounds) and on a small
+           structured table, in the `arbitrary` layout of the target.
+
+Files named `regression_*` are inputs the fuzzers once failed on; they are kept by hand,
+not written here.
+
+The `arbitrary` layout (arbitrary 1.x): integers little-endian; a derived enum reads a
+u32 `v` and picks variant `(v * count) >> 32`; `bool` is one byte's low bit; fixed
+arrays and struct fields follow in order.
+"""
+import csv
+import os
+import struct
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+import mlmap_ref  # noqa: E402
+
+
+def write(target, name, data):
+    d = os.path.join(HERE, "corpus", f"seed_{target}")
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(d, name), "wb") as f:
+        f.write(data)
+
+
+# --- the table format ------------------------------------------------------------------
+
+
+def read_varint(b, i):
+    n, shift = 0, 0
+    while True:
+        byte = b[i]
+        i += 1
+        n |= (byte & 0x7F) << shift
+        shift += 7
+        if byte & 0x80 == 0:
+            return n, i
+
+
+def parse_table(b):
+    """The fields of a table file, as floats and ints (no validation)."""
+    assert b[:4] == b"MLMP"
+    i = 4
+    _version, i = read_varint(b, i)
+    k, i = read_varint(b, i)
+    bml, i = read_varint(b, i)
+    bmap, i = read_varint(b, i)
+    edge_mode, upper_tail = b[i], b[i + 1]
+    lambda_ml, lambda_map = struct.unpack_from("<ff", b, i + 2)
+    i += 10
+    n, i = read_varint(b, i)
+    assert n == k
+    f = lambda j: struct.unpack_from("<f", b, j)[0]  # noqa: E731
+    classes = []
+    for _ in range(k):
+        ln, i = read_varint(b, i)
+        name = b[i : i + ln].decode()
+        i += ln
+        rows, i = read_varint(b, i)
+        c = {"name": name, "rows": rows, "mean": f(i), "var": f(i + 4)}
+        c["ml_lo"], c["ml_hi"] = f(i + 8), f(i + 12)
+        i += 16
+        nb, i = read_varint(b, i)
+        c["ml_freqs"] = [f(i + 4 * j) for j in range(nb)]
+        i += 4 * nb
+        c["map_lo"], c["map_hi"] = f(i), f(i + 4)
+        i += 8
+        nb, i = read_varint(b, i)
+        c["map_freqs"] = [f(i + 4 * j) for j in range(nb)]
+        i += 4 * nb
+        classes.append(c)
+    assert i + 4 == len(b)
+    return classes, lambda_ml, lambda_map, edge_mode, upper_tail
+
+
+def small_class(name, mean, bml, bmap):
+    return {
+        "name": name,
+        "rows": 100,
+        "mean": mean,
+        "var": 1.5,
+        "ml_lo": mean - 2.0,
+        "ml_hi": mean + 2.0,
+        "ml_freqs": [1.0 / bml] * bml,
+        "map_lo": mean - 3.0,
+        "map_hi": mean + 1.0,
+        "map_freqs": [1.0] + [0.0] * (bmap - 1),
+    }
+
+
+# --- the arbitrary layout -----------------------------------------------------------------
+
+
+def u8(v):
+    return struct.pack("<B", v)
+
+
+def i8(v):
+    return struct.pack("<b", v)
+
+
+def u16(v):
+    return struct.pack("<H", v)
+
+
+def i16(v):
+    return struct.pack("<h", v)
+
+
+def u32(v):
+    return struct.pack("<I", v)
+
+
+def u64(v):
+    return struct.pack("<Q", v)
+
+
+def bits(x):
+    return struct.unpack("<I", struct.pack("<f", x))[0]
+
+
+def tag(i, count):
+    """The u32 a derived enum with `count` variants reads as variant `i`."""
+    v = -(-(i << 32) // count)
+    assert (v * count) >> 32 == i
+    return u32(v)
+
+
+def real_bits(x):
+    return tag(2, 3) + u32(bits(x))
+
+
+def real_small(v):
+    return tag(0, 3) + i16(v)
+
+
+def arb_hist(lo, hi, freqs):
+    span = struct.unpack("<f", struct.pack("<f", hi - lo))[0]
+    return real_bits(lo) + real_bits(span) + tag(2, 3) + b"".join(u32(bits(v)) for v in freqs)
+
+
+def arb_class(c, known_index):
+    return (
+        tag(0, 2)
+        + u8(known_index)
+        + u64(c["rows"])
+        + real_bits(c["mean"])
+        + real_bits(c["var"])
+        + arb_hist(c["ml_lo"], c["ml_hi"], c["ml_freqs"])
+        + arb_hist(c["map_lo"], c["map_hi"], c["map_freqs"])
+    )
+
+
+def arb_table(classes, lambda_ml, lambda_map, matlab=0, clamp=0):
+    out = real_bits(lambda_ml) + real_bits(lambda_map) + u8(matlab) + u8(clamp)
+    for i, c in enumerate(classes):
+        out += arb_class(c, i)  # names "car", "cyclist", "pedestrian", "truck", ...
+    return out
+
+
+def logit_bits(x):
+    return tag(0, 3) + u32(bits(x))
+
+
+def logit_raw(b):
+    return tag(0, 3) + u32(b)
+
+
+def logit_edge(map_head, k, ulps):
+    return tag(2, 3) + u8(map_head) + u16(k) + i8(ulps)
+
+
+def os_bits(x):
+    return tag(0, 4) + u32(bits(x))
+
+
+def os_raw(b):
+    return tag(0, 4) + u32(b)
+
+
+def os_special(i):
+    return tag(3, 4) + u8(i)
+
+
+NAN, NEG_NAN, INF, NEG_INF = 0x7FC00000, 0xFFC00001, 0x7F800000, 0xFF800000
+SUB_MIN, SUB_MAX, NEG_SUB = 0x00000001, 0x007FFFFF, 0x80000001
+
+
+def main():
+    shipped = open(os.path.join(ROOT, "tables", "default.mlmap"), "rb").read()
+    classes, lml, lmap, edge_mode, upper_tail = parse_table(shipped)
+
+    # decode
+    write("decode", "shipped.mlmap", shipped)
+    for n in (4, 8, 24, len(shipped) // 2, len(shipped) - 1):
+        write("decode", f"shipped_first_{n}.bin", shipped[:n])
+    small = [small_class("car", 1.0, 4, 3), small_class("cyclist", -1.0, 4, 3)]
+    write("decode", "k2_b4_b3.mlmap", mlmap_ref.encode(small, 0.0055, 0.00012))
+    write("decode", "k2_b4_b3_clamp_matlab.mlmap", mlmap_ref.encode(small, 0.5, 1e-8, 1, 1))
+    one = [small_class("car", 1.0, 1, 1), small_class("x", 0.0, 1, 1)]
+    write("decode", "k2_b1_b1.mlmap", mlmap_ref.encode(one, 0.01, 0.01))
+    five = [small_class(f"class{i}", float(i), 9, 2) for i in range(5)]
+    write("decode", "k5_b9_b2.mlmap", mlmap_ref.encode(five, 1e-3, 1e-3))
+    write("decode", "shipped_clamp.mlmap", mlmap_ref.encode(classes, lml, lmap, edge_mode, 1))
+
+    # roundtrip: Input::Shipped (variant 0 of 4) and Input::Small (variant 1 of 4)
+    write("roundtrip", "shipped.bin", tag(0, 4) + arb_table(classes, lml, lmap))
+    write("roundtrip", "small.bin", tag(1, 4) + arb_table(small, 0.0055, 0.00012, 1, 1))
+    write("roundtrip", "one_bin.bin", tag(2, 4) + arb_table(one, 0.01, 0.01))
+
+    # infer: choice 0 is the shipped table; then [3 x Logit, Objectness] per detection
+    rows = list(csv.DictReader(open(os.path.join(ROOT, "examples", "data", "test.csv"))))
+    names = [c["name"] for c in classes]
+    # (the target reads at most MAX_DETECTIONS = 8 detections per input)
+    for j in range(0, 40, 8):
+        det = b""
+        for r in rows[j : j + 8]:
+            det += b"".join(logit_bits(float(r[n])) for n in names)
+            det += os_bits(float(r["objectness"]))
+        write("infer", f"test_rows_{j}.bin", u8(0) + det)
+    specials = [NAN, NEG_NAN, INF, NEG_INF, SUB_MIN, SUB_MAX, NEG_SUB, 0, 0x80000000, 0x7F7FFFFF]
+    for j, s in enumerate(specials):
+        det = logit_raw(s) + logit_bits(0.5) + logit_bits(-0.5) + os_bits(0.9)
+        det += logit_bits(3.0) + logit_raw(s) + logit_raw(s) + os_special(j)
+        det += logit_bits(-1.0) + logit_bits(-4.0) + logit_raw(s) + os_raw(s)
+        write("infer", f"special_logit_{s:08x}.bin", u8(0) + det)
+    det = b""
+    for o in (NAN, INF, 0x3F800001, 0xBF800000, SUB_MIN, 0, 0x80000000):
+        det += logit_bits(4.0) + logit_bits(-2.0) + logit_bits(-1.0) + os_raw(o)
+    write("infer", "special_objectness.bin", u8(0) + det)
+    for k in range(0, 23, 2):
+        det = b""
+        for kk in (k, k + 1):
+            for ulps in (-1, 0, 1):
+                det += logit_edge(0, kk, ulps) + logit_edge(1, kk, ulps)
+                det += logit_edge(0, kk, -ulps) + os_special(2)
+        write("infer", f"edges_{k}.bin", u8(0) + det)
+    far = [(100.0, 100.0, 100.0), (-100.0, -100.0, -100.0), (1e30, -1e30, 50.0)]
+    det = b"".join(b"".join(logit_bits(x) for x in xs) + os_bits(0.75) for xs in far)
+    write("infer", "out_of_support.bin", u8(0) + det)
+    # choice 2: a structured Table<2, 4, 3>, then [2 x Logit, Objectness] per detection
+    det = b""
+    for xs in ((1.0, -1.0), (-0.5, 0.25), (50.0, -50.0), (3.0, 3.0)):
+        det += b"".join(logit_bits(x) for x in xs) + os_bits(0.5)
+    write("infer", "small_table.bin", u8(2) + arb_table(small, 0.0055, 0.00012) + det)
+
+    # csv (the target is built once the reader lands; see fuzz_targets/csv.rs)
+    with open(os.path.join(ROOT, "examples", "data", "test.csv"), "rb") as f:
+        write("csv", "test_head.csv", b"".join(f.readlines()[:20]))
+    write(
+        "csv",
+        "design_example.csv",
+        b"id,label,objectness,car,cyclist,pedestrian\n"
+        b"17,car,0.93,4.1,-2.3,-1.7\n18,background,0.55,1.2,0.3,-0.4\n",
+    )
+    write("csv", "malformed.csv", b"label,car,cyclist\ncar,1e3,-inf\n,NaN,0\ncyclist,1.5\n")
+    write("csv", "bad_values.csv", b"label,objectness,car,cyclist\ncar,1.5,1,2\ntruck,0.5,1,2\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,790 @@
+//! Shared pieces of the mlmap fuzz targets: structured inputs built with `arbitrary`,
+//! and checkers for the invariants of DESIGN §1.3, written against the public API only.
+//!
+//! Every checker panics (which libFuzzer reports as a crash) when an invariant does not
+//! hold, with a message naming the invariant.
+
+use arbitrary::{Arbitrary, Unstructured};
+use mlmap::host::DynTable;
+use mlmap::{
+    Backend, ClassSpec, EdgeMode, FastMath, Gaussian, Histogram, InferError, Libm, Scores,
+    Settings, Table, TableError, UpperTail, FAST_MATH_MAX_SCORE_ERROR, FREQUENCY_SUM_TOLERANCE,
+    MAX_LAMBDA, NAME_MAX,
+};
+
+/// The table shipped with the crate: K = 3, 22 ML bins, 17 MAP bins.
+pub const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
+
+/// The shape of [`SHIPPED`].
+pub type Shipped = Table<3, 22, 17>;
+
+/// The smallest positive `f32` (a subnormal): the absolute rounding slack of any `f32`
+/// result in the subnormal range, where `f32` has no relative precision left.
+pub const TINY: f64 = 1.401_298_464_324_817e-45;
+
+/// Relative tolerance of invariant 1 (the scores sum to `OS`).
+pub const SUM_TOLERANCE: f64 = 1e-5;
+
+/// CRC-32/ISO-HDLC, the checksum of the table format.
+pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// `bytes` with its last four bytes replaced by the CRC-32 of the bytes before them, so
+/// that mutated bodies get past the checksum and reach the parser and the validation.
+pub fn with_valid_crc(bytes: &[u8]) -> Option<Vec<u8>> {
+    let body = bytes.get(..bytes.len().checked_sub(4)?)?;
+    let mut v = body.to_vec();
+    v.extend_from_slice(&CRC.checksum(body).to_le_bytes());
+    Some(v)
+}
+
+// ---------------------------------------------------------------------------------------
+// Table invariants (DESIGN §1.3, invariant 5)
+// ---------------------------------------------------------------------------------------
+
+/// Checks one histogram against every table invariant and the bin rule of numpy.
+pub fn check_histogram<F: AsRef<[f32]>>(h: &Histogram<F>, bins: usize, what: &str) {
+    assert_eq!(h.bins(), bins, "{what}: bin count");
+    assert_eq!(h.frequencies().len(), bins, "{what}: frequency count");
+    let (lo, hi) = (h.lo(), h.hi());
+    assert!(
+        lo.is_finite() && hi.is_finite(),
+        "{what}: outer edges not finite"
+    );
+    assert_eq!(h.edge(0).to_bits(), lo.to_bits(), "{what}: e_0 != lo");
+    assert_eq!(h.edge(bins).to_bits(), hi.to_bits(), "{what}: e_B != hi");
+    let mut prev = h.edge(0);
+    for k in 1..=bins {
+        let e = h.edge(k);
+        assert!(e.is_finite(), "{what}: edge {k} = {e} not finite");
+        assert!(
+            e > prev,
+            "{what}: edge {k} = {e} not above edge {} = {prev}",
+            k - 1
+        );
+        prev = e;
+    }
+    // The bin rule: an edge opens the bin to its right, the last edge is closed, and
+    // nothing outside [e_0, e_B] is in a bin.
+    for k in 0..bins {
+        let e = h.edge(k);
+        assert_eq!(h.bin(e), Some(k), "{what}: edge {k} = {e} not in bin {k}");
+        let below_next = h.edge(k + 1).next_down();
+        assert_eq!(
+            h.bin(below_next),
+            Some(k),
+            "{what}: {below_next} (just below edge {}) not in bin {k}",
+            k + 1
+        );
+    }
+    assert_eq!(
+        h.bin(hi),
+        Some(bins - 1),
+        "{what}: last edge not in the last bin"
+    );
+    assert_eq!(h.bin(lo.next_down()), None, "{what}: below e_0 is in a bin");
+    assert_eq!(h.bin(hi.next_up()), None, "{what}: above e_B is in a bin");
+    assert_eq!(h.bin(f32::NAN), None, "{what}: NaN is in a bin");
+    // Frequencies: finite, >= 0, summing to 1 (the f32 sum the format defines, and the
+    // exact sum with the f32 rounding of B additions as slack).
+    let mut sum32 = 0.0f32;
+    let mut sum64 = 0.0f64;
+    for (k, &f) in h.frequencies().iter().enumerate() {
+        assert!(f.is_finite() && f >= 0.0, "{what}: frequency {k} = {f}");
+        sum32 += f;
+        sum64 += f64::from(f);
+    }
+    assert!(
+        (sum32 - 1.0).abs() <= FREQUENCY_SUM_TOLERANCE,
+        "{what}: frequencies sum to {sum32}"
+    );
+    let slack = bins as f64 * f64::from(f32::EPSILON);
+    assert!(
+        (sum64 - 1.0).abs() <= f64::from(FREQUENCY_SUM_TOLERANCE) + slack,
+        "{what}: frequencies sum to {sum64} (exact)"
+    );
+    for (k, &f) in h.frequencies().iter().enumerate() {
+        let l = h.likelihood(h.edge(k), UpperTail::Zero);
+        assert_eq!(l.to_bits(), f.to_bits(), "{what}: likelihood at edge {k}");
+    }
+}
+
+/// Checks one prior: finite mean, finite positive variance, a finite positive density.
+pub fn check_prior(g: &Gaussian, what: &str) {
+    assert!(g.mean().is_finite(), "{what}: mean {}", g.mean());
+    let v = g.variance();
+    assert!(v.is_finite() && v > 0.0, "{what}: variance {v}");
+    let peak = g.pdf::<Libm>(g.mean());
+    assert!(
+        peak.is_finite() && peak > 0.0,
+        "{what}: pdf at the mean {peak}"
+    );
+    assert_eq!(g.pdf::<Libm>(f32::INFINITY), 0.0, "{what}: pdf(+inf)");
+    assert_eq!(g.pdf::<Libm>(f32::NEG_INFINITY), 0.0, "{what}: pdf(-inf)");
+}
+
+/// Checks both lambdas.
+pub fn check_settings(s: &Settings) {
+    for (head, l) in [("ML", s.lambda_ml), ("MAP", s.lambda_map)] {
+        assert!(l > 0.0 && l <= MAX_LAMBDA, "lambda {head} = {l}");
+    }
+}
+
+/// Checks the class names: non-empty, at most `NAME_MAX` bytes, not `background`, unique.
+pub fn check_names<'a>(names: impl IntoIterator<Item = &'a str>) {
+    let names: Vec<&str> = names.into_iter().collect();
+    for (i, n) in names.iter().enumerate() {
+        assert!(!n.is_empty() && n.len() <= NAME_MAX, "name {i} = {n:?}");
+        assert_ne!(*n, "background", "name {i} is reserved");
+        assert!(!names[..i].contains(n), "name {i} = {n:?} repeats");
+    }
+}
+
+/// Checks every table invariant of a fixed-size table through its accessors.
+pub fn check_table<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+) {
+    check_settings(t.settings());
+    check_names((0..K).map(|i| t.class_name(i).expect("name of an existing class")));
+    for i in 0..K {
+        let ml = t
+            .ml_histogram(i)
+            .expect("ML histogram of an existing class");
+        let map = t
+            .map_histogram(i)
+            .expect("MAP histogram of an existing class");
+        check_histogram(ml, B_ML, &format!("ML histogram {i}"));
+        check_histogram(map, B_MAP, &format!("MAP histogram {i}"));
+        check_prior(
+            t.prior(i).expect("prior of an existing class"),
+            &format!("prior {i}"),
+        );
+        assert_eq!(t.class_index(t.class_name(i).unwrap_or_default()), Some(i));
+    }
+    assert!(t.class_name(K).is_none() && t.ml_histogram(K).is_none() && t.spec(K).is_none());
+}
+
+/// Checks every table invariant of a run-time shaped table.
+pub fn check_dyn_table(t: &DynTable) {
+    let k = t.k();
+    assert!((2..=usize::from(u16::MAX)).contains(&k), "K = {k}");
+    check_settings(t.settings());
+    check_names(t.class_names());
+    assert_eq!(t.rows().len(), k);
+    assert_eq!(t.priors().len(), k);
+    assert_eq!(t.ml_histograms().len(), k);
+    assert_eq!(t.map_histograms().len(), k);
+    for (i, h) in t.ml_histograms().iter().enumerate() {
+        check_histogram(h, t.bins_ml(), &format!("ML histogram {i}"));
+    }
+    for (i, h) in t.map_histograms().iter().enumerate() {
+        check_histogram(h, t.bins_map(), &format!("MAP histogram {i}"));
+    }
+    for (i, g) in t.priors().iter().enumerate() {
+        check_prior(g, &format!("prior {i}"));
+    }
+}
+
+/// Encodes `t` and asserts the result is `expected` byte for byte, twice (encoding is
+/// deterministic), and that decoding it gives `t` back.
+pub fn check_encoding<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+    expected: Option<&[u8]>,
+) -> Vec<u8> {
+    let mut buf = vec![0u8; Table::<K, B_ML, B_MAP>::MAX_ENCODED_LEN];
+    let first = t
+        .to_slice(&mut buf)
+        .expect("MAX_ENCODED_LEN suffices")
+        .to_vec();
+    let mut buf2 = vec![0xA5u8; Table::<K, B_ML, B_MAP>::MAX_ENCODED_LEN];
+    let second = t.to_slice(&mut buf2).expect("MAX_ENCODED_LEN suffices");
+    assert_eq!(first.as_slice(), &*second, "encoding is not deterministic");
+    if let Some(expected) = expected {
+        assert_eq!(first.as_slice(), expected, "re-encoding changed the bytes");
+    }
+    let back = Table::<K, B_ML, B_MAP>::from_bytes(&first).expect("own encoding decodes");
+    assert_eq!(&back, t, "encode -> decode changed the table");
+    // Host and device share the format: the run-time shaped table reads the same bytes
+    // into the same statistics and writes them back identically.
+    let dynt = DynTable::from_bytes(&first).expect("own encoding decodes as DynTable");
+    assert_eq!(dynt, DynTable::from_table(t), "DynTable differs from Table");
+    assert_eq!(
+        dynt.to_vec().expect("encodes"),
+        first,
+        "DynTable re-encodes differently"
+    );
+    let again = Table::<K, B_ML, B_MAP>::try_from(&dynt).expect("DynTable converts back");
+    assert_eq!(&again, t, "Table -> DynTable -> Table changed the table");
+    first
+}
+
+// ---------------------------------------------------------------------------------------
+// Structured tables
+// ---------------------------------------------------------------------------------------
+
+/// A real number from fuzz input: mostly ordinary magnitudes, sometimes any `f32` bit
+/// pattern (NaN, ±inf, subnormals, extremes).
+#[derive(Arbitrary, Debug, Clone, Copy)]
+pub enum Real {
+    /// `v / 64`: values of order 1 to 500, the range logits live in.
+    Small(i16),
+    /// `m * 2^e`: any magnitude, exactly representable.
+    Scaled(i16, i8),
+    /// Any bit pattern.
+    Bits(u32),
+}
+
+impl Real {
+    /// The value.
+    pub fn get(self) -> f32 {
+        match self {
+            Real::Small(v) => f32::from(v) / 64.0,
+            Real::Scaled(m, e) => f32::from(m) * 2f32.powi(i32::from(e)),
+            Real::Bits(b) => f32::from_bits(b),
+        }
+    }
+
+    /// The value made non-negative, except for raw bit patterns (which may be anything,
+    /// so that validation sees negative and non-finite values too).
+    pub fn positive(self) -> f32 {
+        match self {
+            Real::Bits(b) => f32::from_bits(b),
+            other => other.get().abs(),
+        }
+    }
+}
+
+/// Frequencies of a `B`-bin histogram.
+#[derive(Arbitrary, Debug, Clone)]
+pub enum Freqs<const B: usize> {
+    /// Proportional to integer weights (uniform when they are all 0).
+    Weights([u16; B]),
+    /// All mass in one bin.
+    OneHot(u16),
+    /// Any bit patterns (almost always invalid).
+    Bits([u32; B]),
+}
+
+impl<const B: usize> Freqs<B> {
+    /// The `B` frequencies.
+    pub fn get(&self) -> [f32; B] {
+        match self {
+            Freqs::Weights(w) => {
+                let total: u64 = w.iter().map(|&v| u64::from(v)).sum();
+                if total == 0 {
+                    [1.0 / B as f32; B]
+                } else {
+                    w.map(|v| (f64::from(v) / total as f64) as f32)
+                }
+            }
+            Freqs::OneHot(i) => {
+                let mut f = [0.0; B];
+                f[usize::from(*i) % B] = 1.0;
+                f
+            }
+            Freqs::Bits(b) => b.map(f32::from_bits),
+        }
+    }
+}
+
+/// One histogram: first edge, width of the support, frequencies.
+#[derive(Arbitrary, Debug, Clone)]
+pub struct ArbHistogram<const B: usize> {
+    lo: Real,
+    span: Real,
+    freqs: Freqs<B>,
+}
+
+impl<const B: usize> ArbHistogram<B> {
+    fn range(&self) -> (f32, f32) {
+        let lo = self.lo.get();
+        (lo, lo + self.span.positive())
+    }
+}
+
+/// A class name: a usual one, or any string.
+#[derive(Arbitrary, Debug, Clone)]
+pub enum ArbName {
+    /// One of a few usual names (so that duplicates occur).
+    Known(u8),
+    /// Any UTF-8 string.
+    Text(String),
+}
+
+impl ArbName {
+    fn get(&self) -> &str {
+        const KNOWN: [&str; 8] = [
+            "car",
+            "cyclist",
+            "pedestrian",
+            "truck",
+            "bus",
+            "background",
+            "x",
+            "a-class-name-of-exactly-31-bytes",
+        ];
+        match self {
+            ArbName::Known(i) => KNOWN[usize::from(*i) % KNOWN.len()],
+            ArbName::Text(s) => s,
+        }
+    }
+}
+
+/// One class's statistics.
+#[derive(Arbitrary, Debug, Clone)]
+pub struct ArbClass<const B_ML: usize, const B_MAP: usize> {
+    name: ArbName,
+    rows: u64,
+    mean: Real,
+    variance: Real,
+    ml: ArbHistogram<B_ML>,
+    map: ArbHistogram<B_MAP>,
+}
+
+impl<const B_ML: usize, const B_MAP: usize> ArbClass<B_ML, B_MAP> {
+    fn spec(&self) -> ClassSpec<'_, [f32; B_ML], [f32; B_MAP]> {
+        ClassSpec {
+            name: self.name.get(),
+            rows: self.rows,
+            mean: self.mean.get(),
+            variance: self.variance.positive(),
+            ml_range: self.ml.range(),
+            ml_freqs: self.ml.freqs.get(),
+            map_range: self.map.range(),
+            map_freqs: self.map.freqs.get(),
+        }
+    }
+}
+
+/// Settings of a table.
+#[derive(Arbitrary, Debug, Clone)]
+pub struct ArbSettings {
+    lambda_ml: Real,
+    lambda_map: Real,
+    matlab: bool,
+    clamp: bool,
+}
+
+impl ArbSettings {
+    fn get(&self) -> Settings {
+        Settings {
+            lambda_ml: self.lambda_ml.positive(),
+            lambda_map: self.lambda_map.positive(),
+            edge_mode: if self.matlab {
+                EdgeMode::Matlab
+            } else {
+                EdgeMode::Linspace
+            },
+            upper_tail: if self.clamp {
+                UpperTail::Clamp
+            } else {
+                UpperTail::Zero
+            },
+        }
+    }
+}
+
+/// A whole table, valid or not; [`ArbTable::build`] validates it.
+#[derive(Arbitrary, Debug, Clone)]
+pub struct ArbTable<const K: usize, const B_ML: usize, const B_MAP: usize> {
+    settings: ArbSettings,
+    classes: [ArbClass<B_ML, B_MAP>; K],
+}
+
+impl<const K: usize, const B_ML: usize, const B_MAP: usize> ArbTable<K, B_ML, B_MAP> {
+    /// `Table::from_parts` of these statistics. When it succeeds, asserts that the table
+    /// stores the statistics exactly as given.
+    pub fn build(&self) -> Result<Table<K, B_ML, B_MAP>, TableError> {
+        let settings = self.settings.get();
+        let specs: [ClassSpec<'_, [f32; B_ML], [f32; B_MAP]>; K] =
+            core::array::from_fn(|i| self.classes[i].spec());
+        let t = Table::from_parts(settings, specs.clone())?;
+        assert_eq!(bits_of_settings(t.settings()), bits_of_settings(&settings));
+        for (i, want) in specs.iter().enumerate() {
+            let got = t.spec(i).expect("spec of an existing class");
+            assert_eq!(got.name, want.name, "class {i}: name");
+            assert_eq!(got.rows, want.rows, "class {i}: rows");
+            let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+            assert_eq!(scalars(&got), scalars(want), "class {i}: statistics");
+            assert_eq!(
+                bits(got.ml_freqs),
+                bits(&want.ml_freqs),
+                "class {i}: ML freqs"
+            );
+            assert_eq!(
+                bits(got.map_freqs),
+                bits(&want.map_freqs),
+                "class {i}: MAP freqs"
+            );
+        }
+        Ok(t)
+    }
+}
+
+/// The scalar statistics of a class, as bits.
+fn scalars<F, G>(c: &ClassSpec<'_, F, G>) -> [u32; 6] {
+    [
+        c.mean,
+        c.variance,
+        c.ml_range.0,
+        c.ml_range.1,
+        c.map_range.0,
+        c.map_range.1,
+    ]
+    .map(f32::to_bits)
+}
+
+fn bits_of_settings(s: &Settings) -> (u32, u32, EdgeMode, UpperTail) {
+    (
+        s.lambda_ml.to_bits(),
+        s.lambda_map.to_bits(),
+        s.edge_mode,
+        s.upper_tail,
+    )
+}
+
+// ---------------------------------------------------------------------------------------
+// Inference invariants (DESIGN §1.3, invariants 1, 2 and 4)
+// ---------------------------------------------------------------------------------------
+
+/// A logit from fuzz input.
+#[derive(Arbitrary, Debug, Clone, Copy)]
+pub enum Logit {
+    /// Any bit pattern: NaN (any payload), ±inf, subnormals, ±0, extremes.
+    Bits(u32),
+    /// `v / 256`, the range real logits live in.
+    Grid(i16),
+    /// An edge of this class's ML (`map = false`) or MAP histogram, moved by `ulps`
+    /// representable steps: bin boundaries, where rounding decides.
+    Edge { map: bool, k: u16, ulps: i8 },
+}
+
+/// An objectness score from fuzz input.
+#[derive(Arbitrary, Debug, Clone, Copy)]
+pub enum Objectness {
+    /// Any bit pattern (mostly outside [0, 1]).
+    Bits(u32),
+    /// `v / 65535`, in [0, 1].
+    Unit(u16),
+    /// Exactly 1 (plain classifiers).
+    One,
+    /// A value at or just beyond the bounds of [0, 1], or a subnormal.
+    Special(u8),
+}
+
+impl Objectness {
+    /// The value.
+    pub fn get(self) -> f32 {
+        match self {
+            Objectness::Bits(b) => f32::from_bits(b),
+            Objectness::Unit(v) => f32::from(v) / 65535.0,
+            Objectness::One => 1.0,
+            Objectness::Special(i) => {
+                const S: [f32; 10] = [
+                    0.0,
+                    -0.0,
+                    1.0,
+                    1.000_000_1,
+                    0.999_999_94,
+                    -1.0e-45,
+                    1.0e-45,
+                    f32::MIN_POSITIVE,
+                    f32::INFINITY,
+                    f32::NAN,
+                ];
+                S[usize::from(i) % S.len()]
+            }
+        }
+    }
+}
+
+/// Turns fuzz logits into values for table `t`.
+pub fn logits<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+    raw: &[Logit; K],
+) -> [f32; K] {
+    core::array::from_fn(|i| match raw[i] {
+        Logit::Bits(b) => f32::from_bits(b),
+        Logit::Grid(v) => f32::from(v) / 256.0,
+        Logit::Edge { map, k, ulps } => {
+            let k = usize::from(k);
+            let mut x = if map {
+                let h = t.map_histogram(i).expect("class exists");
+                h.edge(k % (B_MAP + 1))
+            } else {
+                let h = t.ml_histogram(i).expect("class exists");
+                h.edge(k % (B_ML + 1))
+            };
+            for _ in 0..ulps.unsigned_abs() {
+                x = if ulps > 0 { x.next_up() } else { x.next_down() };
+            }
+            x
+        }
+    })
+}
+
+/// The error DESIGN §1.3 (4) demands for these inputs, if any.
+pub fn expected_error(logits: &[f32], objectness: f32) -> Option<InferError> {
+    if let Some(i) = logits.iter().position(|x| x.is_nan()) {
+        return Some(InferError::NanLogit {
+            class: u16::try_from(i).expect("K fits u16"),
+        });
+    }
+    if !(0.0..=1.0).contains(&objectness) {
+        return Some(InferError::Objectness);
+    }
+    None
+}
+
+/// Checks scores for valid inputs against invariants 1 and 2 and against the formula.
+///
+/// `mass[i]` is class i's evidence (`L_i` for ML, `L_i * P_i` for MAP, as the public
+/// accessors compute them) and `lambda` the head's smoothing.
+pub fn check_scores(head: &str, s: &[f32], objectness: f32, mass: &[f32], lambda: f32) {
+    let k = s.len();
+    let os = f64::from(objectness);
+    // Invariant 1: every score in [0, OS], the sum OS within 1e-5 relative. Results in
+    // the subnormal range carry an absolute rounding of up to TINY each.
+    let mut sum = 0.0f64;
+    for (i, &v) in s.iter().enumerate() {
+        assert!(
+            v.is_finite() && v >= 0.0 && v <= objectness,
+            "{head}: score {i} = {v:e} outside [0, OS = {objectness:e}]; scores {s:?}"
+        );
+        sum += f64::from(v);
+    }
+    let tol = SUM_TOLERANCE * os + k as f64 * TINY;
+    assert!(
+        (sum - os).abs() <= tol,
+        "{head}: scores {s:?} sum to {sum:e}, OS = {objectness:e}"
+    );
+    // Invariant 2 (and its generalisation to an evidence of 0 inside the support): no
+    // evidence at all gives exactly OS / K for every class.
+    if mass.iter().all(|&m| m == 0.0) {
+        let share = objectness / k as f32;
+        assert!(
+            s.iter().all(|v| v.to_bits() == share.to_bits()),
+            "{head}: no evidence, scores {s:?} != OS / K = {share:e}"
+        );
+    }
+    // The formula, in f64: OS * (m_i + lambda) / sum_j (m_j + lambda).
+    let a = |m: f32| f64::from(m) + f64::from(lambda);
+    let total: f64 = mass.iter().map(|&m| a(m)).sum();
+    for (i, (&v, &m)) in s.iter().zip(mass).enumerate() {
+        let want = os * a(m) / total;
+        assert!(
+            (f64::from(v) - want).abs() <= SUM_TOLERANCE * os + 4.0 * TINY,
+            "{head}: score {i} = {v:e}, formula gives {want:e}; scores {s:?}, mass {mass:?}, lambda {lambda:e}"
+        );
+    }
+}
+
+/// The likelihood by definition (DESIGN §1.2), independently of the library's lookup:
+/// a binary search for the last edge `e_k <= x` (numpy's rule, the last bin closed).
+pub fn reference_likelihood<F: AsRef<[f32]>>(h: &Histogram<F>, x: f32, tail: UpperTail) -> f32 {
+    let last = h.bins() - 1;
+    let k = if x >= h.lo() && x <= h.hi() {
+        // Invariant: e_lo <= x, and x < e_hi or hi = last + 1.
+        let (mut lo, mut hi) = (0usize, last + 1);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if x >= h.edge(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    } else if x > h.hi() && tail == UpperTail::Clamp {
+        last
+    } else {
+        return 0.0;
+    };
+    h.frequencies()[k]
+}
+
+/// The library's likelihood of every logit equals the definition's, for both heads.
+fn check_likelihoods<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+    x: &[f32; K],
+) {
+    let tail = t.settings().upper_tail;
+    for (i, &xi) in x.iter().enumerate() {
+        let ml = t.ml_histogram(i).expect("class exists");
+        let map = t.map_histogram(i).expect("class exists");
+        for (head, got, want) in [
+            (
+                "ML",
+                ml.likelihood(xi, tail),
+                reference_likelihood(ml, xi, tail),
+            ),
+            (
+                "MAP",
+                map.likelihood(xi, tail),
+                reference_likelihood(map, xi, tail),
+            ),
+        ] {
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "{head} likelihood of class {i} at x = {xi:e}: {got:e}, by definition {want:e}"
+            );
+        }
+    }
+}
+
+fn map_mass<M: Backend, const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+    x: &[f32; K],
+) -> [f32; K] {
+    let tail = t.settings().upper_tail;
+    core::array::from_fn(|i| {
+        let h = t.map_histogram(i).expect("class exists");
+        let l = h.likelihood(x[i], tail);
+        if l > 0.0 {
+            l * t.prior(i).expect("class exists").pdf::<M>(x[i])
+        } else {
+            0.0
+        }
+    })
+}
+
+/// Scores one detection with every head and checks invariants 1, 2 and 4, the formula,
+/// the batch API and the run-time shaped table (which must agree bit for bit).
+///
+/// `fast_bound`: also assert the documented [`FAST_MATH_MAX_SCORE_ERROR`] between the
+/// `FastMath` and `Libm` MAP scores (it is documented for the shipped table), scaled by
+/// `OS`, plus the rounding of scores in the subnormal range (`OS` below about `1e-38`).
+pub fn check_detection<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+    dynt: &DynTable,
+    x: &[f32; K],
+    objectness: f32,
+    fast_bound: bool,
+) {
+    check_likelihoods(t, x);
+    let expected = expected_error(x, objectness);
+    let ml = t.ml(x, objectness);
+    let map = t.map(x, objectness);
+    let fast = t.map_with::<FastMath>(x, objectness);
+    for (head, r) in [("ML", &ml), ("MAP", &map), ("MAP fast", &fast)] {
+        match (expected, r) {
+            (Some(e), r) => assert_eq!(*r, Err(e), "{head}: x = {x:?}, OS = {objectness:e}"),
+            (None, Err(e)) => panic!("{head}: {e} for valid x = {x:?}, OS = {objectness:e}"),
+            (None, Ok(_)) => {}
+        }
+    }
+    let tail = t.settings().upper_tail;
+    if let (Ok(ml), Ok(map), Ok(fast)) = (ml, map, fast) {
+        let l: [f32; K] = core::array::from_fn(|i| {
+            let h = t.ml_histogram(i).expect("class exists");
+            h.likelihood(x[i], tail)
+        });
+        check_scores("ML", &ml.0, objectness, &l, t.settings().lambda_ml);
+        let lambda = t.settings().lambda_map;
+        check_scores(
+            "MAP",
+            &map.0,
+            objectness,
+            &map_mass::<Libm, K, B_ML, B_MAP>(t, x),
+            lambda,
+        );
+        let m = map_mass::<FastMath, K, B_ML, B_MAP>(t, x);
+        check_scores("MAP fast", &fast.0, objectness, &m, lambda);
+        if fast_bound {
+            for (a, b) in map.0.iter().zip(fast.0) {
+                assert!(
+                    f64::from((a - b).abs())
+                        <= f64::from(FAST_MATH_MAX_SCORE_ERROR * objectness) + 2.0 * TINY,
+                    "FastMath differs by more than the documented bound: {:?} vs {:?}, x = {x:?}",
+                    map.0,
+                    fast.0
+                );
+            }
+        }
+        check_same_elsewhere(t, dynt, x, objectness, [ml, map, fast]);
+    } else {
+        let mut out = [[0.0f32; K]; 1];
+        let batch = t.ml_batch(&[*x], Some(&[objectness]), &mut out);
+        let want = mlmap::BatchError::Row {
+            index: 0,
+            error: expected.expect("an error was expected"),
+        };
+        assert_eq!(batch, Err(want), "ml_batch of an invalid row");
+        let mut o = [0.0f32; K];
+        let mut scratch = [0.0f32; K];
+        assert_eq!(
+            dynt.ml_into(x, objectness, &mut o, &mut scratch),
+            Err(want_err(want))
+        );
+        assert_eq!(
+            dynt.map_into::<Libm>(x, objectness, &mut o, &mut scratch),
+            Err(want_err(want))
+        );
+    }
+}
+
+fn want_err(b: mlmap::BatchError) -> InferError {
+    match b {
+        mlmap::BatchError::Row { error, .. } => error,
+        other => panic!("not a row error: {other:?}"),
+    }
+}
+
+/// The batch API and the run-time shaped table compute the very same bits.
+fn check_same_elsewhere<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+    dynt: &DynTable,
+    x: &[f32; K],
+    objectness: f32,
+    [ml, map, fast]: [Scores<K>; 3],
+) {
+    let bits = |s: &[f32; K]| s.map(f32::to_bits);
+    let mut out = [[0.0f32; K]; 2];
+    let xs = [*x, *x];
+    let os = [objectness, objectness];
+    t.ml_batch(&xs, Some(&os), &mut out).expect("valid rows");
+    assert_eq!(bits(&out[1]), bits(&ml.0), "ml_batch differs from ml");
+    t.map_batch(&xs, Some(&os), &mut out).expect("valid rows");
+    assert_eq!(bits(&out[1]), bits(&map.0), "map_batch differs from map");
+    t.map_batch_with::<FastMath>(&xs, Some(&os), &mut out)
+        .expect("valid rows");
+    assert_eq!(
+        bits(&out[1]),
+        bits(&fast.0),
+        "map_batch_with differs from map_with"
+    );
+    let mut o = [0.0f32; K];
+    let mut scratch = [0.0f32; K];
+    dynt.ml_into(x, objectness, &mut o, &mut scratch)
+        .expect("valid");
+    assert_eq!(bits(&o), bits(&ml.0), "DynTable ML differs");
+    dynt.map_into::<Libm>(x, objectness, &mut o, &mut scratch)
+        .expect("valid");
+    assert_eq!(bits(&o), bits(&map.0), "DynTable MAP differs");
+    dynt.map_into::<FastMath>(x, objectness, &mut o, &mut scratch)
+        .expect("valid");
+    assert_eq!(bits(&o), bits(&fast.0), "DynTable MAP fast differs");
+}
+
+/// Most detections one fuzz input holds: small inputs keep executions fast, and the
+/// fuzzer explores one detection at a time anyway.
+pub const MAX_DETECTIONS: usize = 8;
+
+/// Scores detections read from `u` until it is exhausted (at most [`MAX_DETECTIONS`]).
+pub fn check_detections<const K: usize, const B_ML: usize, const B_MAP: usize>(
+    t: &Table<K, B_ML, B_MAP>,
+    u: &mut Unstructured<'_>,
+    fast_bound: bool,
+) {
+    let dynt = DynTable::from_table(t);
+    for _ in 0..MAX_DETECTIONS {
+        if u.is_empty() {
+            break;
+        }
+        let (Ok(raw), Ok(os)) = (u.arbitrary::<[Logit; K]>(), u.arbitrary::<Objectness>()) else {
+            break;
+        };
+        let x = logits(t, &raw);
+        check_detection(t, &dynt, &x, os.get(), fast_bound);
+    }
+}

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Deterministic instructions per detection (and per table decoding) of every layer,
+# counted by valgrind's callgrind on examples/instr_count.rs: each kind runs N and 2N
+# times, and (I(2N) - I(N)) / N removes the fixed cost (start-up, reading the rows).
+#
+#   tools/callgrind_counts.sh            # N = 16384 (a multiple of the 4096 test rows)
+#   N=4096 tools/callgrind_counts.sh
+#
+# Prints one line per kind, and the ratios to the Sigmoid layer, both gross and net of
+# the loop around the layer (kind `noop`: fetch a row, call through a function pointer,
+# fold the result into a checksum).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+n="${N:-16384}"
+cargo build --quiet --release --features micromath --example instr_count
+bin="$(cargo metadata --format-version 1 --no-deps |
+    python3 -c 'import json,sys; print(json.load(sys.stdin)["target_directory"])')/release/examples/instr_count"
+
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+
+# Total instructions (Ir) of one run.
+count() {
+    valgrind --tool=callgrind --callgrind-out-file="$out/cg" "$bin" "$1" "$2" >/dev/null 2>&1
+    awk '/^totals:/ { print $2 }' "$out/cg"
+}
+
+declare -A per
+printf '%-10s %14s %14s %12s\n' kind "Ir(N=$n)" "Ir(2N)" "Ir/detection"
+for kind in noop sigmoid softmax ml map map_fast decode; do
+    a="$(count "$kind" "$n")"
+    b="$(count "$kind" "$((2 * n))")"
+    per[$kind]="$(python3 -c "print(f'{($b - $a) / $n:.1f}')")"
+    printf '%-10s %14s %14s %12s\n' "$kind" "$a" "$b" "${per[$kind]}"
+done
+echo
+for kind in softmax ml map map_fast; do
+    python3 -c "
+g, s, n = ${per[$kind]}, ${per[sigmoid]}, ${per[noop]}
+print(f'$kind / sigmoid = {g / s:.3f} (net of the loop: {(g - n) / (s - n):.3f})')"
+done
