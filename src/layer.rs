@@ -213,7 +213,7 @@ pub fn scores_from_evidence(
     if k == 0 || out.len() != k || scratch.len() != k {
         return Err(InferError::Length);
     }
-    let finite = |v: f32| v.is_finite() && v >= 0.0 && v <= 1e30;
+    let finite = |v: f32| (0.0..=1e30).contains(&v);
     if !(lambda > 0.0 && lambda <= crate::MAX_LAMBDA && evidence.iter().all(|&e| finite(e))) {
         return Err(InferError::Evidence);
     }
