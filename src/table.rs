@@ -2,11 +2,11 @@
 
 use crate::error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
 use crate::gaussian::Gaussian;
-use crate::histogram::Histogram;
+use crate::histogram::{EdgeMode, Histogram, UpperTail};
 use crate::layer::{self, Scores};
 use crate::math::{Backend, Libm};
 use crate::name::ClassName;
-use crate::wire::{self, ClassSpec, ClassWire, Settings};
+use crate::wire::{self, ClassSpec, Settings};
 
 /// A fitted ML/MAP table for `K` classes, `B_ML` bins in the ML head's histograms and
 /// `B_MAP` bins in the MAP head's.
@@ -140,31 +140,13 @@ impl<const K: usize, const B_ML: usize, const B_MAP: usize> Table<K, B_ML, B_MAP
                 found: header.shape(),
             });
         }
-        type Freqs<const B: usize> = heapless::Vec<f32, B>;
-        type Classes<'a, const K: usize, const M: usize, const P: usize> =
-            heapless::Vec<ClassWire<'a, Freqs<M>, Freqs<P>>, K>;
-        let (settings, classes) = wire::parse_body::<Classes<'_, K, B_ML, B_MAP>>(body)?;
-        if classes.len() != K {
-            return Err(DecodeError::Malformed);
-        }
-        let mut table = Self::placeholder(settings);
-        for (i, c) in classes.into_iter().enumerate() {
-            let c = c.into_spec();
-            let class = u16::try_from(i).unwrap_or(u16::MAX);
-            let bins = |head| TableError::BinCount { head, class };
-            let spec = ClassSpec {
-                name: c.name,
-                rows: c.rows,
-                mean: c.mean,
-                variance: c.variance,
-                ml_range: c.ml_range,
-                ml_freqs: to_array(&c.ml_freqs).ok_or(bins(Head::Ml))?,
-                map_range: c.map_range,
-                map_freqs: to_array(&c.map_freqs).ok_or(bins(Head::Map))?,
-            };
-            table.set_class(i, spec.validate(i, B_ML, B_MAP)?);
-        }
-        wire::check_unique_names(&table.names)?;
+        let mut table = Self::placeholder(Settings {
+            lambda_ml: 0.0,
+            lambda_map: 0.0,
+            edge_mode: EdgeMode::Linspace,
+            upper_tail: UpperTail::Zero,
+        });
+        table.decode_body(body)?;
         wire::check_canonical(bytes.len(), Self::SHAPE, &table.settings, |i| table.spec(i))?;
         Ok(table)
     }
@@ -201,22 +183,24 @@ impl<const K: usize, const B_ML: usize, const B_MAP: usize> Table<K, B_ML, B_MAP
         })
     }
 
-    /// A table of the right shape whose classes are all overwritten before it escapes.
+    /// A table of the right shape, all zeros (it does not satisfy the invariants): every
+    /// class and the settings are overwritten before it escapes. All zeros, so that
+    /// building it costs no constant data, only a cleared stack slot.
     fn placeholder(settings: Settings) -> Self {
         const fn hist<const B: usize>() -> Histogram<[f32; B]> {
             Histogram {
                 lo: 0.0,
-                hi: 1.0,
-                width: 1.0,
-                inv_width: 1.0,
+                hi: 0.0,
+                width: 0.0,
+                inv_width: 0.0,
                 freqs: [0.0; B],
             }
         }
-        let prior = Gaussian {
+        const PRIOR: Gaussian = Gaussian {
             mean: 0.0,
-            var: 1.0,
-            neg_half_inv_var: -0.5,
-            norm: 1.0,
+            var: 0.0,
+            neg_half_inv_var: 0.0,
+            norm: 0.0,
         };
         Self {
             names: [ClassName {
@@ -224,11 +208,87 @@ impl<const K: usize, const B_ML: usize, const B_MAP: usize> Table<K, B_ML, B_MAP
                 bytes: [0; crate::name::NAME_MAX],
             }; K],
             rows: [0; K],
-            priors: [prior; K],
+            priors: [PRIOR; K],
             ml: [hist::<B_ML>(); K],
             map: [hist::<B_MAP>(); K],
             settings,
         }
+    }
+
+    /// Parses `body` straight into this table's storage, then validates every class in
+    /// place: nothing the size of a class is copied on the stack.
+    fn decode_body(&mut self, body: &[u8]) -> Result<(), DecodeError> {
+        let mut sink = Sink {
+            table: self,
+            names: [""; K],
+            lens: [(0, 0); K],
+        };
+        let (settings, count) = wire::parse_body_into(body, &mut sink)?;
+        let Sink { names, lens, .. } = sink;
+        if count != K {
+            return Err(DecodeError::Malformed);
+        }
+        self.settings = settings;
+        for (i, (name, (ml_len, map_len))) in names.into_iter().zip(lens).enumerate() {
+            let class = u16::try_from(i).unwrap_or(u16::MAX);
+            if ml_len != B_ML {
+                return Err(TableError::BinCount {
+                    head: Head::Ml,
+                    class,
+                }
+                .into());
+            }
+            if map_len != B_MAP {
+                return Err(TableError::BinCount {
+                    head: Head::Map,
+                    class,
+                }
+                .into());
+            }
+            self.validate_class(i, name)?;
+        }
+        wire::check_unique_names(&self.names)?;
+        Ok(())
+    }
+
+    /// Validates class `i` as decoded into the table by [`Table::from_bytes`] (raw
+    /// fields, frequencies in place), with the checks of [`ClassSpec`]; fills in its
+    /// name and the derived fields of its prior and histograms.
+    fn validate_class(&mut self, i: usize, name: &str) -> Result<(), TableError> {
+        let (Some(ml), Some(map), Some(prior), Some(&rows)) = (
+            self.ml.get(i),
+            self.map.get(i),
+            self.priors.get(i),
+            self.rows.get(i),
+        ) else {
+            return Err(TableError::ClassCount);
+        };
+        let spec = ClassSpec {
+            name,
+            rows,
+            mean: prior.mean,
+            variance: prior.var,
+            ml_range: (ml.lo, ml.hi),
+            ml_freqs: &ml.freqs[..],
+            map_range: (map.lo, map.hi),
+            map_freqs: &map.freqs[..],
+        };
+        let c = spec.validate(i, B_ML, B_MAP)?;
+        let (name, prior) = (c.name, c.prior);
+        let ml_width = (c.ml.width, c.ml.inv_width);
+        let map_width = (c.map.width, c.map.inv_width);
+        if let (Some(n), Some(p), Some(ml), Some(map)) = (
+            self.names.get_mut(i),
+            self.priors.get_mut(i),
+            self.ml.get_mut(i),
+            self.map.get_mut(i),
+        ) {
+            *n = name;
+            *p = prior;
+            (ml.width, ml.inv_width) = ml_width;
+            (map.width, map.inv_width) = map_width;
+        }
+        Ok(())
     }
 
     fn set_class(&mut self, i: usize, c: wire::ValidClass<[f32; B_ML], [f32; B_MAP]>) {
@@ -412,16 +472,48 @@ impl<const K: usize, const B_ML: usize, const B_MAP: usize> Table<K, B_ML, B_MAP
     }
 }
 
-/// The `B` values of `v`, or `None` if it holds another number.
-fn to_array<const B: usize>(v: &heapless::Vec<f32, B>) -> Option<[f32; B]> {
-    if v.len() != B {
-        return None;
+/// Where [`Table::from_bytes`] parses a body to: the table's own storage, and the fields
+/// that are validated before they can be stored (names, frequency counts).
+struct Sink<'t, 'a, const K: usize, const B_ML: usize, const B_MAP: usize> {
+    table: &'t mut Table<K, B_ML, B_MAP>,
+    names: [&'a str; K],
+    /// Frequencies each class had, ML and MAP.
+    lens: [(usize, usize); K],
+}
+
+impl<'a, const K: usize, const B_ML: usize, const B_MAP: usize> wire::BodySink<'a>
+    for Sink<'_, 'a, K, B_ML, B_MAP>
+{
+    fn capacity(&self) -> usize {
+        K
     }
-    let mut a = [0.0; B];
-    for (d, s) in a.iter_mut().zip(v.iter()) {
-        *d = *s;
+
+    fn freqs(&mut self, class: usize, head: Head) -> &mut [f32] {
+        match head {
+            Head::Ml => self.table.ml.get_mut(class).map(|h| &mut h.freqs[..]),
+            Head::Map => self.table.map.get_mut(class).map(|h| &mut h.freqs[..]),
+        }
+        .unwrap_or_default()
     }
-    Some(a)
+
+    fn class(&mut self, class: usize, f: wire::ClassFields<'a>) {
+        let t = &mut *self.table;
+        if let (Some(name), Some(len), Some(rows), Some(prior), Some(ml), Some(map)) = (
+            self.names.get_mut(class),
+            self.lens.get_mut(class),
+            t.rows.get_mut(class),
+            t.priors.get_mut(class),
+            t.ml.get_mut(class),
+            t.map.get_mut(class),
+        ) {
+            *name = f.name;
+            *len = (f.ml_len, f.map_len);
+            *rows = f.rows;
+            (prior.mean, prior.var) = (f.mean, f.variance);
+            (ml.lo, ml.hi) = f.ml_range;
+            (map.lo, map.hi) = f.map_range;
+        }
+    }
 }
 
 /// Runs `score` over every row.
@@ -444,4 +536,188 @@ fn batch<const K: usize>(
             .0;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::ClassWire;
+    use std::vec::Vec;
+
+    /// The decoder `Table::from_bytes` had before it decoded in place: the whole body
+    /// into `heapless` vectors, then class by class into a table. Kept to show that the
+    /// in-place decoder gives the same table, or the same error, for any bytes.
+    fn from_bytes_via_vectors<const K: usize, const B_ML: usize, const B_MAP: usize>(
+        bytes: &[u8],
+    ) -> Result<Table<K, B_ML, B_MAP>, DecodeError> {
+        type Freqs<const B: usize> = heapless::Vec<f32, B>;
+        type Classes<'a, const K: usize, const M: usize, const P: usize> =
+            heapless::Vec<ClassWire<'a, Freqs<M>, Freqs<P>>, K>;
+        fn to_array<const B: usize>(v: &heapless::Vec<f32, B>) -> Option<[f32; B]> {
+            (v.len() == B).then(|| core::array::from_fn(|i| v[i]))
+        }
+        let (header, body) = wire::open(bytes)?;
+        if header.shape() != Table::<K, B_ML, B_MAP>::SHAPE {
+            return Err(DecodeError::ShapeMismatch {
+                expected: Table::<K, B_ML, B_MAP>::SHAPE,
+                found: header.shape(),
+            });
+        }
+        let (settings, classes) = wire::parse_body::<Classes<'_, K, B_ML, B_MAP>>(body)?;
+        if classes.len() != K {
+            return Err(DecodeError::Malformed);
+        }
+        let mut table = Table::<K, B_ML, B_MAP>::placeholder(settings);
+        for (i, c) in classes.into_iter().enumerate() {
+            let c = c.into_spec();
+            let class = u16::try_from(i).unwrap();
+            let bins = |head| TableError::BinCount { head, class };
+            let spec = ClassSpec {
+                name: c.name,
+                rows: c.rows,
+                mean: c.mean,
+                variance: c.variance,
+                ml_range: c.ml_range,
+                ml_freqs: to_array(&c.ml_freqs).ok_or(bins(Head::Ml))?,
+                map_range: c.map_range,
+                map_freqs: to_array(&c.map_freqs).ok_or(bins(Head::Map))?,
+            };
+            table.set_class(i, spec.validate(i, B_ML, B_MAP)?);
+        }
+        wire::check_unique_names(&table.names)?;
+        let shape = Table::<K, B_ML, B_MAP>::SHAPE;
+        wire::check_canonical(bytes.len(), shape, &table.settings, |i| table.spec(i))?;
+        Ok(table)
+    }
+
+    /// `bytes` with its CRC recomputed, so that decoding gets past the checksum.
+    fn with_crc(mut bytes: Vec<u8>) -> Vec<u8> {
+        if bytes.len() >= 4 {
+            let n = bytes.len() - 4;
+            let crc = wire::CRC.checksum(&bytes[..n]);
+            bytes[n..].copy_from_slice(&crc.to_le_bytes());
+        }
+        bytes
+    }
+
+    /// Every mutation of `original` worth trying: each bit flipped, each byte set to a
+    /// few values, each byte removed, a byte inserted anywhere, every truncation, and
+    /// seeded random multi-byte edits; all with a correct CRC.
+    fn mutations(original: &[u8]) -> Vec<Vec<u8>> {
+        let mut out = Vec::new();
+        let n = original.len();
+        for i in 0..n - 4 {
+            for bit in 0..8 {
+                let mut b = original.to_vec();
+                b[i] ^= 1 << bit;
+                out.push(with_crc(b));
+            }
+            for v in [0x00, 0x01, 0x02, 0x03, 0x04, 0x7f, 0x80, 0xff] {
+                let mut b = original.to_vec();
+                b[i] = v;
+                out.push(with_crc(b));
+            }
+            let mut b = original.to_vec();
+            b.remove(i);
+            out.push(with_crc(b));
+            for v in [0x00, 0x80, 0x16] {
+                let mut b = original.to_vec();
+                b.insert(i, v);
+                out.push(with_crc(b));
+            }
+        }
+        // A frequency sequence one shorter or one longer than the shape, wherever a
+        // byte could be its length.
+        for i in 0..n - 4 {
+            if original[i] > 1 && original[i] < 0x80 {
+                let mut b = original.to_vec();
+                b[i] -= 1;
+                b.drain(i + 1..(i + 5).min(n - 4));
+                out.push(with_crc(b));
+                let mut b = original.to_vec();
+                b[i] += 1;
+                b.splice(i + 1..i + 1, 0.5f32.to_le_bytes());
+                out.push(with_crc(b));
+            }
+        }
+        for len in 0..n {
+            let mut b = original[..len].to_vec();
+            b.extend_from_slice(&[0; 4]);
+            out.push(with_crc(b));
+        }
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        for _ in 0..20_000 {
+            let mut b = original.to_vec();
+            for _ in 0..1 + next() % 4 {
+                let i = (next() % (n as u64 - 4)) as usize;
+                b[i] = next() as u8;
+            }
+            out.push(with_crc(b));
+        }
+        out
+    }
+
+    /// `original` (a valid table of this shape) re-encoded with class names that break
+    /// the name rules.
+    fn bad_names<const K: usize, const B_ML: usize, const B_MAP: usize>(
+        original: &[u8],
+    ) -> Vec<Vec<u8>> {
+        let t = Table::<K, B_ML, B_MAP>::from_bytes(original).unwrap();
+        let long = "x".repeat(crate::NAME_MAX + 1);
+        let first = t.class_name(0).unwrap();
+        let mut out = Vec::new();
+        for (class, name) in [
+            (1, first),
+            (K - 1, first),
+            (0, ""),
+            (1, "background"),
+            (0, &long),
+        ] {
+            let mut buf = [0u8; 4096];
+            let spec = |i: usize| {
+                let mut c = t.spec(i)?;
+                if i == class {
+                    c.name = name;
+                }
+                Some(c)
+            };
+            let b = wire::encode(Table::<K, B_ML, B_MAP>::SHAPE, &t.settings, spec, &mut buf);
+            out.push(b.unwrap().to_vec());
+        }
+        out
+    }
+
+    fn same_as_vectors<const K: usize, const B_ML: usize, const B_MAP: usize>(original: &[u8]) {
+        let mut all = mutations(original);
+        if Table::<K, B_ML, B_MAP>::from_bytes(original).is_ok() {
+            all.extend(bad_names::<K, B_ML, B_MAP>(original));
+        }
+        for bytes in all {
+            assert_eq!(
+                Table::<K, B_ML, B_MAP>::from_bytes(&bytes),
+                from_bytes_via_vectors::<K, B_ML, B_MAP>(&bytes),
+                "{bytes:02x?}"
+            );
+        }
+    }
+
+    #[test]
+    fn in_place_decoding_equals_decoding_via_vectors() {
+        let default = include_bytes!("../tables/default.mlmap");
+        assert!(Table::<3, 22, 17>::from_bytes(default).is_ok());
+        same_as_vectors::<3, 22, 17>(default);
+        let small = include_bytes!("../tests/golden/layer/small.mlmap");
+        assert!(Table::<3, 4, 2>::from_bytes(small).is_ok());
+        same_as_vectors::<3, 4, 2>(small);
+        // Shapes that do not match the bytes.
+        same_as_vectors::<2, 4, 2>(small);
+        same_as_vectors::<4, 4, 2>(small);
+        same_as_vectors::<3, 3, 2>(small);
+    }
 }

@@ -15,6 +15,9 @@
 //! nothing but `core`, serde and postcard, and never allocates: the class sequence type
 //! `C` is chosen by the caller (`heapless::Vec` on the device, `Vec` on the host).
 
+use core::fmt;
+
+use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{DecodeError, EncodeError, Head, TableError};
@@ -34,6 +37,12 @@ pub const MAX_LAMBDA: f32 = 1.0e6;
 
 /// The checksum: CRC-32/ISO-HDLC, the CRC of zlib, PNG and Ethernet.
 pub(crate) const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+
+/// The same checksum computed bit by bit, for checking a table when it is decoded: no
+/// 1 KiB lookup table in flash (decoding checks a few hundred bytes once, at start-up).
+/// The table-driven [`CRC`] is only linked in by encoding.
+const CRC_CHECK: crc::Crc<u32, crc::NoTable> =
+    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Length of the trailing checksum.
 const CRC_LEN: usize = 4;
@@ -236,6 +245,8 @@ pub(crate) struct ClassWire<'a, V, W> {
     map_freqs: W,
 }
 
+// Only the host's `DynTable` decodes through `ClassWire` (and `parse_body`).
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
 impl<'a, V, W> ClassWire<'a, V, W> {
     pub(crate) fn into_spec(self) -> ClassSpec<'a, V, W> {
         ClassSpec {
@@ -253,6 +264,7 @@ impl<'a, V, W> ClassWire<'a, V, W> {
 
 /// Everything after the header and before the CRC.
 #[derive(Deserialize)]
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
 struct BodyWire<C> {
     settings: SettingsWire,
     classes: C,
@@ -272,7 +284,7 @@ pub(crate) fn open(bytes: &[u8]) -> Result<(Header, &[u8]), DecodeError> {
     for (d, s) in crc.iter_mut().zip(stored) {
         *d = *s;
     }
-    if CRC.checksum(payload) != u32::from_le_bytes(crc) {
+    if CRC_CHECK.checksum(payload) != u32::from_le_bytes(crc) {
         return Err(DecodeError::Corrupted);
     }
     let (header, body) =
@@ -286,6 +298,7 @@ pub(crate) fn open(bytes: &[u8]) -> Result<(Header, &[u8]), DecodeError> {
 }
 
 /// Parses the body into settings and the class sequence `C`; every byte must be used.
+#[cfg_attr(not(feature = "std"), allow(dead_code))]
 pub(crate) fn parse_body<'a, C: Deserialize<'a>>(
     body: &'a [u8],
 ) -> Result<(Settings, C), DecodeError> {
@@ -295,6 +308,186 @@ pub(crate) fn parse_body<'a, C: Deserialize<'a>>(
         return Err(DecodeError::Malformed);
     }
     Ok((wire.settings.to_settings()?, wire.classes))
+}
+
+/// Receives the classes of a body as they are parsed, so that a fixed-size table can be
+/// decoded straight into its own storage, one field at a time, with no intermediate
+/// copy of the classes on the stack.
+pub(crate) trait BodySink<'a> {
+    /// Most classes the storage holds; a longer sequence is malformed.
+    fn capacity(&self) -> usize;
+    /// Where class `class`'s frequencies of `head` go; a longer sequence is malformed.
+    fn freqs(&mut self, class: usize, head: Head) -> &mut [f32];
+    /// Every other field of class `class`, once its frequencies are stored.
+    fn class(&mut self, class: usize, fields: ClassFields<'a>);
+}
+
+/// The fields of one class besides its frequencies, as parsed (not validated).
+pub(crate) struct ClassFields<'a> {
+    pub(crate) name: &'a str,
+    pub(crate) rows: u64,
+    pub(crate) mean: f32,
+    pub(crate) variance: f32,
+    pub(crate) ml_range: (f32, f32),
+    /// Number of ML frequencies the class has (all stored: at most the capacity).
+    pub(crate) ml_len: usize,
+    pub(crate) map_range: (f32, f32),
+    /// Number of MAP frequencies the class has.
+    pub(crate) map_len: usize,
+}
+
+/// Parses the body into `sink`, with exactly the syntax [`parse_body`] accepts (a
+/// postcard `BodyWire`); every byte must be used. Returns the validated settings and
+/// the number of classes.
+pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
+    body: &'a [u8],
+    sink: &mut S,
+) -> Result<(Settings, usize), DecodeError> {
+    let mut de = postcard::Deserializer::from_bytes(body);
+    // A struct is its fields in order: the settings, then the class sequence.
+    let settings = SettingsWire::deserialize(&mut de).map_err(|_| DecodeError::Malformed)?;
+    let count = ClassesSeed(sink)
+        .deserialize(&mut de)
+        .map_err(|_| DecodeError::Malformed)?;
+    let rest = de.finalize().map_err(|_| DecodeError::Malformed)?;
+    if !rest.is_empty() {
+        return Err(DecodeError::Malformed);
+    }
+    Ok((settings.to_settings()?, count))
+}
+
+/// The class sequence, into a [`BodySink`]; its value is the number of classes.
+struct ClassesSeed<'s, S>(&'s mut S);
+
+impl<'de, S: BodySink<'de>> DeserializeSeed<'de> for ClassesSeed<'_, S> {
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de, S: BodySink<'de>> Visitor<'de> for ClassesSeed<'_, S> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence of classes")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let mut class = 0;
+        while class < self.0.capacity() {
+            let seed = ClassSeed {
+                sink: &mut *self.0,
+                class,
+            };
+            match seq.next_element_seed(seed)? {
+                Some(()) => class += 1,
+                None => return Ok(class),
+            }
+        }
+        // Full: any further class is one too many.
+        match seq.size_hint() {
+            Some(0) => Ok(class),
+            _ => Err(A::Error::invalid_length(class + 1, &self)),
+        }
+    }
+}
+
+/// One class, into a [`BodySink`] (the fields of [`ClassWire`], in order).
+struct ClassSeed<'s, S> {
+    sink: &'s mut S,
+    class: usize,
+}
+
+/// The number of fields of [`ClassWire`].
+const CLASS_FIELDS: usize = 10;
+
+impl<'de, S: BodySink<'de>> DeserializeSeed<'de> for ClassSeed<'_, S> {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        // What the derived `Deserialize` of a struct asks for; postcard reads the
+        // fields in order.
+        d.deserialize_tuple(CLASS_FIELDS, self)
+    }
+}
+
+impl<'de, S: BodySink<'de>> Visitor<'de> for ClassSeed<'_, S> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a class")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let mut field = 0;
+        let mut next = |seq: &mut A| -> Result<f32, A::Error> {
+            field += 1;
+            seq.next_element()?
+                .ok_or_else(|| A::Error::invalid_length(field, &"a class"))
+        };
+        let name: &'de str = seq
+            .next_element()?
+            .ok_or_else(|| A::Error::invalid_length(0, &"a class"))?;
+        let rows: u64 = seq
+            .next_element()?
+            .ok_or_else(|| A::Error::invalid_length(1, &"a class"))?;
+        let (mean, variance) = (next(&mut seq)?, next(&mut seq)?);
+        let ml_range = (next(&mut seq)?, next(&mut seq)?);
+        let ml_len = seq
+            .next_element_seed(FreqsSeed(self.sink.freqs(self.class, Head::Ml)))?
+            .ok_or_else(|| A::Error::invalid_length(6, &"a class"))?;
+        let map_range = (next(&mut seq)?, next(&mut seq)?);
+        let map_len = seq
+            .next_element_seed(FreqsSeed(self.sink.freqs(self.class, Head::Map)))?
+            .ok_or_else(|| A::Error::invalid_length(9, &"a class"))?;
+        self.sink.class(
+            self.class,
+            ClassFields {
+                name,
+                rows,
+                mean,
+                variance,
+                ml_range,
+                ml_len,
+                map_range,
+                map_len,
+            },
+        );
+        Ok(())
+    }
+}
+
+/// A frequency sequence, into a slice; its value is the number of frequencies.
+struct FreqsSeed<'s>(&'s mut [f32]);
+
+impl<'de> DeserializeSeed<'de> for FreqsSeed<'_> {
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for FreqsSeed<'_> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence of frequencies")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let mut n = 0;
+        while let Some(v) = seq.next_element::<f32>()? {
+            match self.0.get_mut(n) {
+                Some(slot) => *slot = v,
+                None => return Err(A::Error::invalid_length(n + 1, &self)),
+            }
+            n += 1;
+        }
+        Ok(n)
+    }
 }
 
 /// Serialises the classes `0..k` produced by `class` as one postcard sequence.

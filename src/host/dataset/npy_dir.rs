@@ -1,22 +1,24 @@
 //! NPY directory input (DESIGN §2), through the `npyz` crate.
 //!
-//! Arrays are read element by element from buffered files, so memory does not grow
-//! with N. File sizes are checked against the headers when the directory is opened,
-//! so a truncated array is reported before any row is produced.
+//! The headers are parsed by `npyz`; the data is read in chunks of rows (at most
+//! `CHUNK_VALUES` elements per array at once) and decoded here, so memory does not grow
+//! with N and the cost per row is a few instructions. File sizes are checked against the
+//! headers when the directory is opened, so a truncated array is reported before any row
+//! is produced.
 
-use std::boxed::Box;
 use std::fs::File;
-use std::io::{self, BufReader, Seek};
+use std::io::{self, BufReader, Read, Seek};
 use std::path::{Path, PathBuf};
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use npyz::{DType, NpyFile, NpyHeader, Order, TypeChar};
+use npyz::{DType, Endianness, NpyHeader, Order, TypeChar};
 
 use super::{check_class_names, DataError, DataErrorKind, Label, Location, Row};
 
-/// Read buffer of each array.
-const BUFFER: usize = 1 << 16;
+/// Read buffer of each array: it holds the header; the data is read in chunks larger
+/// than it, which bypass it.
+const BUFFER: usize = 1 << 12;
 
 /// Element types this module reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -33,11 +35,24 @@ enum Elem {
     U64,
 }
 
-/// A checked array: its file and element type.
+impl Elem {
+    /// Bytes per element.
+    fn size(self) -> usize {
+        match self {
+            Self::I8 | Self::U8 => 1,
+            Self::I16 | Self::U16 => 2,
+            Self::F32 | Self::I32 | Self::U32 => 4,
+            Self::F64 | Self::I64 | Self::U64 => 8,
+        }
+    }
+}
+
+/// A checked array: its file, element type and byte order.
 #[derive(Debug, Clone)]
 struct Array {
     path: PathBuf,
     elem: Elem,
+    big_endian: bool,
 }
 
 /// What the directory holds, read from the array headers.
@@ -49,8 +64,6 @@ pub(super) struct Schema {
     labels: Option<Array>,
     objectness: Option<Array>,
 }
-
-type Stream<T> = Box<dyn Iterator<Item = io::Result<T>>>;
 
 const FLOATS: &str = "float32 or float64";
 const INTEGERS: &str = "an integer type";
@@ -154,10 +167,15 @@ fn check_array(
             found,
         }));
     }
+    let big_endian = match &dtype {
+        DType::Plain(ts) => ts.endianness() == Endianness::Big,
+        _ => false,
+    };
     Ok((
         Array {
             path: path.to_path_buf(),
             elem,
+            big_endian,
         },
         shape,
     ))
@@ -220,68 +238,154 @@ fn class_names(dir: &Path, k: usize) -> Result<Vec<String>, DataError> {
     Ok(names)
 }
 
-fn float_stream(a: &Array) -> Result<Stream<f64>, DataError> {
-    let (header, reader) = open_npy(&a.path)?;
-    let npy = NpyFile::with_header(header, reader);
-    let dtype_error = |_| {
-        DataError::new(
-            &a.path,
-            DataErrorKind::Io {
-                reason: "the array's dtype changed while it was read".into(),
-            },
-        )
-    };
-    Ok(match a.elem {
-        Elem::F32 => Box::new(
-            npy.data::<f32>()
-                .map_err(dtype_error)?
-                .map(|r| r.map(f64::from)),
-        ),
-        _ => Box::new(npy.data::<f64>().map_err(dtype_error)?),
-    })
+/// Values read from each array at once (per array, at most this many elements): bulk
+/// reads keep the cost per row at a few instructions and the memory bounded.
+const CHUNK_VALUES: usize = 1 << 14;
+
+/// The message of an array that ends before the row count of its header.
+const ENDED_EARLY: &str = "the file ended early (it changed after it was opened)";
+
+/// Decodes every complete element of `raw` with `from`, appending to `out`.
+#[inline(always)]
+fn decode<const N: usize, T>(raw: &[u8], out: &mut Vec<T>, from: impl Fn([u8; N]) -> T) {
+    let (elements, _) = raw.as_chunks::<N>();
+    out.extend(elements.iter().map(|&b| from(b)));
 }
 
-fn int_stream(a: &Array) -> Result<Stream<i128>, DataError> {
-    fn boxed<T>(npy: NpyFile<BufReader<File>>, path: &Path) -> Result<Stream<i128>, DataError>
-    where
-        T: npyz::Deserialize + Into<i128> + 'static,
-    {
-        let reader = npy.data::<T>().map_err(|_| {
-            DataError::new(
+/// The elements of one array, read chunk by chunk from the first data byte on.
+struct Column<'a> {
+    array: &'a Array,
+    reader: BufReader<File>,
+    raw: Vec<u8>,
+    /// The read error that stopped the last fill short, if any.
+    error: Option<io::Error>,
+}
+
+impl<'a> Column<'a> {
+    fn open(array: &'a Array) -> Result<Self, DataError> {
+        let (_, reader) = open_npy(&array.path)?;
+        Ok(Self {
+            array,
+            reader,
+            raw: Vec::new(),
+            error: None,
+        })
+    }
+
+    /// Reads the bytes of up to `n` more elements; returns the bytes of the complete
+    /// ones. Stops short at the end of the file or at a read error (kept for
+    /// [`Column::missing`]).
+    fn read(&mut self, n: usize) -> &[u8] {
+        let size = self.array.elem.size();
+        let want = n.saturating_mul(size);
+        if self.raw.len() < want {
+            self.raw.resize(want, 0);
+        }
+        let mut filled = 0;
+        while filled < want {
+            let Some(dst) = self.raw.get_mut(filled..want) else {
+                break;
+            };
+            match self.reader.read(dst) {
+                Ok(0) => break,
+                Ok(got) => filled += got,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => {
+                    self.error = Some(e);
+                    break;
+                }
+            }
+        }
+        let complete = filled - filled % size;
+        self.raw.get(..complete).unwrap_or(&[])
+    }
+
+    /// Reads up to `n` more elements of a float array into `out` (replacing its
+    /// contents); fewer only at the end of the file or at a read error.
+    fn floats(&mut self, n: usize, out: &mut Vec<f64>) {
+        out.clear();
+        let (elem, big) = (self.array.elem, self.array.big_endian);
+        let raw = self.read(n);
+        match (elem, big) {
+            (Elem::F32, false) => decode(raw, out, |b| f64::from(f32::from_le_bytes(b))),
+            (Elem::F32, true) => decode(raw, out, |b| f64::from(f32::from_be_bytes(b))),
+            (_, false) => decode(raw, out, f64::from_le_bytes),
+            (_, true) => decode(raw, out, f64::from_be_bytes),
+        }
+    }
+
+    /// Reads up to `n` more elements of an integer array into `out`, as
+    /// [`floats`](Self::floats). `u64` values above `i64::MAX` (never a valid label)
+    /// become `i64::MAX`; [`Column::exact_int`] gives their value.
+    fn ints(&mut self, n: usize, out: &mut Vec<i64>) {
+        out.clear();
+        let (elem, big) = (self.array.elem, self.array.big_endian);
+        let raw = self.read(n);
+        macro_rules! ints {
+            ($t:ty) => {
+                if big {
+                    decode(raw, out, |b| i64::from(<$t>::from_be_bytes(b)))
+                } else {
+                    decode(raw, out, |b| i64::from(<$t>::from_le_bytes(b)))
+                }
+            };
+        }
+        let wide = |v: u64| i64::try_from(v).unwrap_or(i64::MAX);
+        match elem {
+            Elem::I8 => ints!(i8),
+            Elem::I16 => ints!(i16),
+            Elem::I32 => ints!(i32),
+            Elem::I64 => ints!(i64),
+            Elem::U8 => ints!(u8),
+            Elem::U16 => ints!(u16),
+            Elem::U32 => ints!(u32),
+            Elem::U64 | Elem::F32 | Elem::F64 if big => {
+                decode(raw, out, |b| wide(u64::from_be_bytes(b)));
+            }
+            Elem::U64 | Elem::F32 | Elem::F64 => decode(raw, out, |b| wide(u64::from_le_bytes(b))),
+        }
+    }
+
+    /// Element `i` of the last chunk read by [`Column::ints`], exactly.
+    fn exact_int(&self, i: usize) -> Option<i128> {
+        let size = self.array.elem.size();
+        let b = self.raw.get(i * size..(i + 1) * size)?;
+        let big = self.array.big_endian;
+        macro_rules! int {
+            ($t:ty) => {{
+                let b = b.as_chunks().0.first().copied()?;
+                i128::from(if big {
+                    <$t>::from_be_bytes(b)
+                } else {
+                    <$t>::from_le_bytes(b)
+                })
+            }};
+        }
+        Some(match self.array.elem {
+            Elem::I8 => int!(i8),
+            Elem::I16 => int!(i16),
+            Elem::I32 => int!(i32),
+            Elem::I64 => int!(i64),
+            Elem::U8 => int!(u8),
+            Elem::U16 => int!(u16),
+            Elem::U32 => int!(u32),
+            Elem::U64 | Elem::F32 | Elem::F64 => int!(u64),
+        })
+    }
+
+    /// The error for an element of row `row` that could not be read.
+    fn missing(&mut self, row: u64) -> DataError {
+        let path = &self.array.path;
+        match self.error.take() {
+            Some(e) => DataError::io(path, &e),
+            None => DataError::new(
                 path,
                 DataErrorKind::Io {
-                    reason: "the array's dtype changed while it was read".into(),
+                    reason: ENDED_EARLY.into(),
                 },
-            )
-        })?;
-        Ok(Box::new(reader.map(|r| r.map(Into::into))))
-    }
-    let (header, reader) = open_npy(&a.path)?;
-    let npy = NpyFile::with_header(header, reader);
-    match a.elem {
-        Elem::I8 => boxed::<i8>(npy, &a.path),
-        Elem::I16 => boxed::<i16>(npy, &a.path),
-        Elem::I32 => boxed::<i32>(npy, &a.path),
-        Elem::I64 => boxed::<i64>(npy, &a.path),
-        Elem::U8 => boxed::<u8>(npy, &a.path),
-        Elem::U16 => boxed::<u16>(npy, &a.path),
-        Elem::U32 => boxed::<u32>(npy, &a.path),
-        Elem::U64 | Elem::F32 | Elem::F64 => boxed::<u64>(npy, &a.path),
-    }
-}
-
-/// The next element of `stream`, the element of row `row` of `path`.
-fn next<T>(stream: &mut Stream<T>, path: &Path, row: u64) -> Result<T, DataError> {
-    match stream.next() {
-        Some(Ok(v)) => Ok(v),
-        Some(Err(e)) => Err(DataError::io(path, &e).at(Location::Row(row))),
-        None => Err(DataError::new(
-            path,
-            DataErrorKind::Io {
-                reason: "the file ended early (it changed after it was opened)".into(),
-            },
-        )
-        .at(Location::Row(row))),
+            ),
+        }
+        .at(Location::Row(row))
     }
 }
 
@@ -333,57 +437,162 @@ impl Schema {
         E: From<DataError>,
         F: FnMut(Row<'_>) -> Result<(), E>,
     {
-        let mut logits = float_stream(&self.logits)?;
-        let mut labels = self.labels.as_ref().map(int_stream).transpose()?;
-        let mut objectness = self.objectness.as_ref().map(float_stream).transpose()?;
-        let mut buf = std::vec![0.0f64; self.k];
-        for index in 0..self.rows {
-            let at = |path: &Path, kind| DataError::new(path, kind).at(Location::Row(index));
-            for (slot, name) in buf.iter_mut().zip(classes) {
-                let v = next(&mut logits, &self.logits.path, index)?;
-                if !v.is_finite() {
-                    let text = std::format!("{v}");
-                    let e = at(&self.logits.path, DataErrorKind::NotFinite { text });
-                    return Err(e.in_column(name.as_str()).into());
-                }
-                *slot = v;
-            }
-            let label = match (&mut labels, &self.labels) {
-                (Some(stream), Some(a)) => match next(stream, &a.path, index)? {
-                    -1 => Label::Background,
-                    v => match usize::try_from(v) {
-                        Ok(c) if c < self.k => Label::Class(c),
-                        _ => {
-                            let kind = DataErrorKind::LabelIndex {
-                                value: v,
-                                classes: self.k,
-                            };
-                            return Err(at(&a.path, kind).into());
+        let k = self.k;
+        let mut cols = Columns {
+            logits: Column::open(&self.logits)?,
+            labels: self.labels.as_ref().map(Column::open).transpose()?,
+            objectness: self.objectness.as_ref().map(Column::open).transpose()?,
+        };
+        let rows_per_chunk = (CHUNK_VALUES / k).max(1);
+        let mut chunk = Chunk::default();
+        let mut start = 0u64;
+        while start < self.rows {
+            let n = usize::try_from(self.rows - start)
+                .map_or(rows_per_chunk, |left| left.min(rows_per_chunk));
+            cols.read(n, k, &mut chunk);
+            if chunk.is_valid(n, k, &cols) {
+                // Every field is present and valid: no check per row.
+                for (i, (index, logits)) in (start..).zip(chunk.xs.chunks_exact(k)).enumerate() {
+                    let label = match (&cols.labels, chunk.ls.get(i)) {
+                        (Some(_), Some(&v)) => {
+                            usize::try_from(v).map_or(Label::Background, Label::Class)
                         }
-                    },
-                },
-                _ => Label::Missing,
-            };
-            let os = match (&mut objectness, &self.objectness) {
-                (Some(stream), Some(a)) => {
-                    let v = next(stream, &a.path, index)?;
-                    if !(0.0..=1.0).contains(&v) {
-                        let text = std::format!("{v}");
-                        return Err(at(&a.path, DataErrorKind::ObjectnessRange { text }).into());
-                    }
-                    v
+                        _ => Label::Missing,
+                    };
+                    let objectness = chunk.objs.get(i).copied().unwrap_or(1.0);
+                    f(Row {
+                        index,
+                        line: None,
+                        id: None,
+                        label,
+                        objectness,
+                        logits,
+                    })?;
                 }
-                _ => 1.0,
-            };
-            f(Row {
-                index,
-                line: None,
-                id: None,
-                label,
-                objectness: os,
-                logits: &buf,
-            })?;
+            } else {
+                // Field by field, in file order: the rows before the first problem are
+                // produced, then the problem is the error.
+                for (i, index) in (start..start + n as u64).enumerate() {
+                    let (label, objectness) =
+                        self.checked_row(classes, &mut cols, &chunk, i, index)?;
+                    f(Row {
+                        index,
+                        line: None,
+                        id: None,
+                        label,
+                        objectness,
+                        logits: chunk.xs.get(i * k..(i + 1) * k).unwrap_or(&[]),
+                    })?;
+                }
+            }
+            start += n as u64;
         }
         Ok(())
+    }
+
+    /// Checks row `i` of `chunk` (row `index` of the arrays) field by field: its logits
+    /// in column order, then its label, then its objectness. Returns the label and the
+    /// objectness, or the first problem.
+    fn checked_row(
+        &self,
+        classes: &[String],
+        cols: &mut Columns<'_>,
+        chunk: &Chunk,
+        i: usize,
+        index: u64,
+    ) -> Result<(Label, f64), DataError> {
+        let k = self.k;
+        let at = |path: &Path, kind| DataError::new(path, kind).at(Location::Row(index));
+        for c in 0..k {
+            let Some(&v) = chunk.xs.get(i * k + c) else {
+                return Err(cols.logits.missing(index));
+            };
+            if !v.is_finite() {
+                let text = std::format!("{v}");
+                let e = at(&self.logits.path, DataErrorKind::NotFinite { text });
+                return Err(e.in_column(classes.get(c).map_or("", String::as_str)));
+            }
+        }
+        let label = match &mut cols.labels {
+            Some(col) => match chunk.ls.get(i) {
+                None => return Err(col.missing(index)),
+                Some(-1) => Label::Background,
+                Some(&v) => match usize::try_from(v) {
+                    Ok(class) if class < k => Label::Class(class),
+                    _ => {
+                        let value = col.exact_int(i).unwrap_or(i128::from(v));
+                        let kind = DataErrorKind::LabelIndex { value, classes: k };
+                        return Err(at(&col.array.path, kind));
+                    }
+                },
+            },
+            None => Label::Missing,
+        };
+        let objectness = match &mut cols.objectness {
+            Some(col) => match chunk.objs.get(i) {
+                None => return Err(col.missing(index)),
+                Some(&v) if (0.0..=1.0).contains(&v) => v,
+                Some(&v) => {
+                    let text = std::format!("{v}");
+                    return Err(at(&col.array.path, DataErrorKind::ObjectnessRange { text }));
+                }
+            },
+            None => 1.0,
+        };
+        Ok((label, objectness))
+    }
+}
+
+/// The open arrays of a pass.
+struct Columns<'a> {
+    logits: Column<'a>,
+    labels: Option<Column<'a>>,
+    objectness: Option<Column<'a>>,
+}
+
+impl Columns<'_> {
+    /// Reads the next `n` rows of every array into `chunk` (fewer where an array ends
+    /// early or fails).
+    fn read(&mut self, n: usize, k: usize, chunk: &mut Chunk) {
+        self.logits.floats(n * k, &mut chunk.xs);
+        chunk.ls.clear();
+        if let Some(c) = &mut self.labels {
+            c.ints(n, &mut chunk.ls);
+        }
+        chunk.objs.clear();
+        if let Some(c) = &mut self.objectness {
+            c.floats(n, &mut chunk.objs);
+        }
+    }
+}
+
+/// A chunk of rows: logits (row-major), labels and objectness as read.
+#[derive(Default)]
+struct Chunk {
+    xs: Vec<f64>,
+    ls: Vec<i64>,
+    objs: Vec<f64>,
+}
+
+impl Chunk {
+    /// `true` when all `n` rows are complete and every field is valid (checked a
+    /// column at a time, which the compiler vectorises).
+    fn is_valid(&self, n: usize, k: usize, cols: &Columns<'_>) -> bool {
+        let classes = i64::try_from(k).unwrap_or(i64::MAX);
+        let complete = self.xs.len() == n * k
+            && (cols.labels.is_none() || self.ls.len() == n)
+            && (cols.objectness.is_none() || self.objs.len() == n);
+        // Branch-free integer accumulators, so that each scan vectorises.
+        let bad_logits = self
+            .xs
+            .iter()
+            .fold(0u8, |bad, v| bad | u8::from(!v.is_finite()));
+        let bad_labels = self.ls.iter().fold(0u8, |bad, &v| {
+            bad | u8::from(v < -1) | u8::from(v >= classes)
+        });
+        let bad_objectness = self.objs.iter().fold(0u8, |bad, &v| {
+            bad | u8::from(!(v >= 0.0)) | u8::from(!(v <= 1.0))
+        });
+        complete && (bad_logits | bad_labels | bad_objectness) == 0
     }
 }

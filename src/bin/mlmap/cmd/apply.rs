@@ -1,5 +1,7 @@
 //! `mlmap apply`: score every row through the layer, write CSV (DESIGN §4).
 
+use std::fmt::Write as _;
+
 use mlmap::host::dataset::Label;
 use mlmap::Libm;
 
@@ -36,7 +38,9 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
         let mut ml = vec![0.0f32; k];
         let mut map = vec![0.0f32; k];
         let mut scratch = vec![0.0f32; k];
-        let mut record: Vec<String> = Vec::with_capacity(header.len());
+        // Fields are written one by one, numbers through one reused buffer: no
+        // allocation per row.
+        let mut number = String::new();
         src.for_each_row(|row| -> Result<()> {
             for (d, &s) in x.iter_mut().zip(row.logits) {
                 *d = s as f32;
@@ -49,34 +53,27 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
             table
                 .map_into::<Libm>(&x, os, &mut map, &mut scratch)
                 .map_err(at)?;
-            record.clear();
             if src.has_ids() {
-                record.push(row.id.unwrap_or("").to_string());
+                csv.write_field(row.id.unwrap_or("")).map_err(csv_err)?;
             }
             if src.has_labels() {
-                record.push(match row.label {
-                    Label::Class(c) => names.get(c).copied().unwrap_or("").to_string(),
-                    Label::Background => "background".to_string(),
-                    Label::Missing => String::new(),
-                });
+                let label = match row.label {
+                    Label::Class(c) => names.get(c).copied().unwrap_or(""),
+                    Label::Background => "background",
+                    Label::Missing => "",
+                };
+                csv.write_field(label).map_err(csv_err)?;
             }
-            record.extend(ml.iter().map(|v| v.to_string()));
-            record.extend(map.iter().map(|v| v.to_string()));
-            record.push(
-                names
-                    .get(mlmap::argmax(&ml))
-                    .copied()
-                    .unwrap_or("")
-                    .to_string(),
-            );
-            record.push(
-                names
-                    .get(mlmap::argmax(&map))
-                    .copied()
-                    .unwrap_or("")
-                    .to_string(),
-            );
-            csv.write_record(&record).map_err(csv_err)?;
+            for v in ml.iter().chain(&map) {
+                number.clear();
+                let _ = write!(number, "{v}");
+                csv.write_field(&number).map_err(csv_err)?;
+            }
+            for scores in [&ml, &map] {
+                let pred = names.get(mlmap::argmax(scores)).copied().unwrap_or("");
+                csv.write_field(pred).map_err(csv_err)?;
+            }
+            csv.write_record(None::<&[u8]>).map_err(csv_err)?;
             Ok(())
         })?;
         csv.flush()

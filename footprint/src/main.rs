@@ -1,0 +1,83 @@
+//! The smallest firmware that decodes a table and scores a detection with both heads,
+//! for measuring mlmap's footprint on a Cortex-M4F (`.ci/footprint.sh`).
+//!
+//! Built for `thumbv7em-none-eabihf` (opt-level "s", LTO, panic abort) in three
+//! variants with the same skeleton and the same inputs, which the optimiser cannot see
+//! ([`black_box`]):
+//!
+//! * default: [`Table::from_bytes`](mlmap::Table::from_bytes) (CRC, postcard, every
+//!   invariant), then [`Table::ml`](mlmap::Table::ml) and
+//!   [`Table::map`](mlmap::Table::map) (libm's `expf`) on one detection;
+//! * feature `decode-only`: the decoding alone;
+//! * feature `baseline`: no mlmap call at all.
+//!
+//! The differences of the images are the footprints of decoding and of inference. The
+//! binary is never run; it only has to link. Decoding and scoring are functions of
+//! their own, so that `-Z emit-stack-sizes` reports their frames separately.
+#![no_std]
+#![no_main]
+
+use core::hint::black_box;
+
+use cortex_m_rt::entry;
+
+/// The table shipped with the crate (K = 3, 22 ML bins, 17 MAP bins), as firmware keeps
+/// it in a calibration flash sector.
+static TABLE_BYTES: &[u8] = include_bytes!("../../tables/default.mlmap");
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
+    loop {}
+}
+
+/// The shape of the shipped table.
+#[cfg(not(feature = "baseline"))]
+type Calibration = mlmap::Table<3, 22, 17>;
+
+/// Decoding at start-up; the caller keeps the table.
+#[cfg(not(feature = "baseline"))]
+#[inline(never)]
+fn decode(bytes: &[u8]) -> Result<Calibration, mlmap::DecodeError> {
+    Calibration::from_bytes(bytes)
+}
+
+/// Both heads on one detection.
+#[cfg(not(any(feature = "baseline", feature = "decode-only")))]
+#[inline(never)]
+fn score(table: &Calibration) {
+    let (logits, objectness) = black_box(([4.2f32, -1.5, 0.3], 0.9f32));
+    black_box(table.ml(&logits, objectness).ok());
+    black_box(table.map(&logits, objectness).ok());
+}
+
+#[cfg(feature = "decode-only")]
+#[inline(never)]
+fn score(table: &Calibration) {
+    black_box(table);
+    black_box(([4.2f32, -1.5, 0.3], 0.9f32));
+}
+
+#[cfg(not(feature = "baseline"))]
+#[inline(never)]
+fn layer() {
+    let decoded = decode(black_box(TABLE_BYTES));
+    if let Ok(table) = &decoded {
+        score(black_box(table));
+    }
+    black_box(decoded.err());
+}
+
+#[cfg(feature = "baseline")]
+#[inline(never)]
+fn layer() {
+    black_box(TABLE_BYTES);
+    black_box(([4.2f32, -1.5, 0.3], 0.9f32));
+}
+
+#[entry]
+fn main() -> ! {
+    layer();
+    loop {
+        black_box(());
+    }
+}
