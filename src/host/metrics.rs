@@ -439,8 +439,9 @@ pub fn outcomes(
         .collect())
 }
 
-/// The bin edges of a convention, and the rule that maps a confidence to a bin.
-enum Edges {
+/// The bin edges of a convention, and the rule that maps a confidence to a bin (also
+/// the binner of the tuner's ECE objective).
+pub(crate) enum Edges {
     /// `e_0 .. e_M`; bin = number of `e_1 .. e_M` below `conf`, at most `M - 1`.
     Design(Vec<f64>),
     /// `e_0 .. e_M`; bin = number of `e_i <= clip(conf)` minus 1, at most `M - 1`.
@@ -450,7 +451,7 @@ enum Edges {
 }
 
 impl Edges {
-    fn new(binning: Binning, m: usize) -> Self {
+    pub(crate) fn new(binning: Binning, m: usize) -> Self {
         match binning {
             Binning::Design => Self::Design((0..=m).map(|i| i as f64 / m as f64).collect()),
             Binning::Netcal => {
@@ -484,7 +485,7 @@ impl Edges {
     }
 
     /// The bin of a confidence in `[0, 1]`.
-    fn bin(&self, conf: f64) -> usize {
+    pub(crate) fn bin(&self, conf: f64) -> usize {
         match self {
             Self::Design(e) => {
                 let inner = e.get(1..).unwrap_or_default();
@@ -808,6 +809,10 @@ mod tests {
                 "torchmetrics {conf}"
             );
         }
+        // Edges m / M close their bin under the DESIGN rule (also the tuner's binner).
+        assert_eq!(bin_of(Binning::Design, 0.1000001), 1);
+        assert_eq!(bin_of(Binning::Design, 0.9), 8);
+        assert_eq!(bin_of(Binning::Design, 0.05), 0);
         assert_eq!(Edges::new(Binning::Design, 1).bin(0.0), 0);
         assert_eq!(Edges::new(Binning::Netcal, 1).bin(1.0), 0);
         assert_eq!(Edges::new(Binning::Torchmetrics, 1).bin(1.0), 1);

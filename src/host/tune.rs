@@ -12,6 +12,7 @@
 use std::prelude::rust_2021::*;
 use std::{format, vec};
 
+use crate::host::metrics::{Binning, Edges};
 use crate::{scores_from_evidence, Gaussian, Histogram, Libm, UpperTail};
 
 /// What the search minimises.
@@ -141,8 +142,10 @@ pub fn lambda_grid(min: f64, max: f64, per_decade: usize) -> Result<Vec<f32>, St
 
 /// Running sums of the objectives over the rows of one candidate; `only` restricts
 /// the work to one objective (the NLL's logarithm is the costly part).
-struct Accumulator {
+struct Accumulator<'e> {
     only: Option<Objective>,
+    /// The DESIGN §1.5 bins, shared with [`crate::host::metrics`].
+    edges: &'e Edges,
     bins: [(u64, f64, f64); ECE_BINS],
     n: u64,
     nll_sum: f64,
@@ -153,24 +156,11 @@ struct Accumulator {
 /// ECE bins of the tuning objective (DESIGN §1.5 default).
 const ECE_BINS: usize = 10;
 
-/// Index (0-based) of the bin `((m-1)/M, m/M]` holding `conf`, conf = 0 in the first;
-/// edges are evaluated in f64 as `m / M`, exactly as the metric defines them.
-pub(crate) fn ece_bin(conf: f64, m_bins: usize) -> usize {
-    let m = m_bins as f64;
-    let mut b = (conf * m).ceil().clamp(1.0, m) as usize;
-    while b > 1 && conf <= (b - 1) as f64 / m {
-        b -= 1;
-    }
-    while b < m_bins && conf > b as f64 / m {
-        b += 1;
-    }
-    b - 1
-}
-
-impl Accumulator {
-    fn new(only: Option<Objective>) -> Self {
+impl<'e> Accumulator<'e> {
+    fn new(only: Option<Objective>, edges: &'e Edges) -> Self {
         Self {
             only,
+            edges,
             bins: [(0, 0.0, 0.0); ECE_BINS],
             n: 0,
             nll_sum: 0.0,
@@ -189,7 +179,7 @@ impl Accumulator {
             let best = crate::argmax(scores);
             let conf = f64::from(scores.get(best).copied().unwrap_or(0.0));
             let correct = label == Some(best);
-            if let Some(bin) = self.bins.get_mut(ece_bin(conf, ECE_BINS)) {
+            if let Some(bin) = self.bins.get_mut(self.edges.bin(conf)) {
                 bin.0 += 1;
                 bin.1 += conf;
                 bin.2 += if correct { 1.0 } else { 0.0 };
@@ -285,7 +275,8 @@ fn score(
     let k = val.k;
     let mut scores = vec![0.0f32; k];
     let mut scratch = vec![0.0f32; k];
-    let mut acc = Accumulator::new(only);
+    let edges = Edges::new(Binning::Design, ECE_BINS);
+    let mut acc = Accumulator::new(only, &edges);
     for ((e, &os), &label) in evidence.chunks_exact(k).zip(val.objectness).zip(val.labels) {
         if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
             acc.add(&scores, label);
@@ -451,24 +442,5 @@ mod tests {
         }
         assert!(lambda_grid(0.0, 1.0, 3).is_err());
         assert!(lambda_grid(1.0, 0.1, 3).is_err());
-    }
-
-    #[test]
-    fn ece_bins_follow_float64_edges() {
-        // (conf, 0-based bin) for M = 10: edges m/10 belong to the bin they close.
-        let cases = [
-            (0.0, 0),
-            (0.05, 0),
-            (0.1, 0),
-            (0.1000001, 1),
-            (0.3, 2),
-            (0.7, 6),
-            (0.9, 8),
-            (0.95, 9),
-            (1.0, 9),
-        ];
-        for (c, want) in cases {
-            assert_eq!(ece_bin(c, 10), want, "conf {c}");
-        }
     }
 }
