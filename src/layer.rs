@@ -49,6 +49,30 @@ impl<const K: usize> Scores<K> {
         argmax(&self.0)
     }
 
+    /// The predicted class with ties broken by the detection's own logits (DESIGN §1.7):
+    /// among the classes sharing the largest score, the one with the largest logit
+    /// (the lowest index if those tie too).
+    ///
+    /// A detection that every histogram calls "I don't know" gets `OS / K` for every
+    /// class; [`Scores::argmax`] would then always answer class 0, while `decide` keeps
+    /// the detector's ranking. The scores themselves are not changed.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// let s = mlmap::Scores([0.3, 0.3, 0.3]);
+    /// assert_eq!(s.argmax(), 0);
+    /// assert_eq!(s.decide(&[-1.0, 2.5, 0.4]), 1);
+    /// ```
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    #[inline]
+    pub fn decide(&self, logits: &[f32; K]) -> usize {
+        decide(&self.0, logits)
+    }
+
     /// The largest score (the detection's confidence).
     #[inline]
     pub fn confidence(&self) -> f32 {
@@ -78,6 +102,57 @@ pub fn argmax(values: &[f32]) -> usize {
         }
     }
     best
+}
+
+/// The tie-safe decision of DESIGN §1.7 on any scores and logits: the index of the
+/// largest score; among equal largest scores, the one whose logit is largest; among
+/// those, the lowest index.
+///
+/// This is the one implementation of the rule: [`Scores::decide`] on the device and the
+/// host's metrics and reports (`*_pred`, `accuracy`, the true/false positive split) all
+/// call it. A logit missing (a shorter `logits`) or NaN never wins a tie. Returns 0 for
+/// empty `scores`.
+///
+/// # Examples
+///
+/// ```
+/// // Scores in f64 (host), logits as read from the data.
+/// assert_eq!(mlmap::decide(&[0.25f64, 0.5, 0.5], &[9.0f64, 1.0, 2.0]), 2);
+/// assert_eq!(mlmap::decide(&[0.25f64, 0.5, 0.5], &[9.0f64, 2.0, 2.0]), 1);
+/// ```
+///
+/// # Panics
+///
+/// Never.
+#[inline]
+pub fn decide<S: Copy + PartialOrd, L: Copy + PartialOrd>(scores: &[S], logits: &[L]) -> usize {
+    let mut best = 0;
+    let (mut best_s, mut best_l): (Option<S>, Option<L>) = (None, None);
+    for (i, &s) in scores.iter().enumerate() {
+        let l = logits.get(i).copied();
+        let wins = match best_s {
+            None => comparable(s), // the first comparable score
+            Some(b) if s > b => true,
+            Some(b) if s == b => match (l, best_l) {
+                (Some(l), Some(bl)) => l > bl,
+                (Some(l), None) => comparable(l),
+                _ => false,
+            },
+            Some(_) => false,
+        };
+        if wins {
+            best = i;
+            best_s = Some(s);
+            best_l = l.filter(|&l| comparable(l));
+        }
+    }
+    best
+}
+
+/// False for NaN (a value not equal to itself), true for every other value.
+#[inline]
+fn comparable<T: PartialOrd>(v: T) -> bool {
+    v.partial_cmp(&v).is_some()
 }
 
 /// Checks a detection's inputs against a table with `k` classes.
@@ -237,6 +312,30 @@ mod tests {
         assert_eq!(argmax(&[0.3, 0.3, 0.3]), 0);
         assert_eq!(argmax(&[0.0, 0.0]), 0);
         assert_eq!(argmax(&[]), 0);
+    }
+
+    #[test]
+    fn decide_breaks_ties_by_logit() {
+        // No tie: the largest score wins whatever the logits.
+        assert_eq!(decide(&[0.1f32, 0.7, 0.2], &[5.0f32, -1.0, 3.0]), 1);
+        // Three-way tie at OS / K: the largest logit.
+        assert_eq!(decide(&[0.3f32; 3], &[-1.0f32, 0.5, 0.2]), 1);
+        // Tie between two of three: only the tied classes compete.
+        assert_eq!(decide(&[0.4f32, 0.2, 0.4], &[1.0f32, 9.0, 2.0]), 2);
+        // Logits tie too: the lowest index.
+        assert_eq!(decide(&[0.5f32, 0.5], &[1.0f32, 1.0]), 0);
+        // A NaN or missing logit never wins a tie.
+        assert_eq!(decide(&[0.5f32, 0.5], &[f32::NAN, 1.0]), 1);
+        assert_eq!(decide(&[0.5f32, 0.5], &[1.0f32, f32::NAN]), 0);
+        assert_eq!(decide(&[0.5f32, 0.5, 0.5], &[1.0f32]), 0);
+        // A NaN score never wins; empty scores give 0.
+        assert_eq!(decide(&[f32::NAN, 0.1], &[9.0f32, 0.0]), 1);
+        assert_eq!(decide::<f32, f32>(&[], &[]), 0);
+        // Same as argmax when no score ties.
+        assert_eq!(
+            decide(&[0.1f64, 0.2, 0.3], &[3.0f64, 2.0, 1.0]),
+            argmax(&[0.1, 0.2, 0.3])
+        );
     }
 
     #[test]

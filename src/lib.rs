@@ -85,7 +85,7 @@ mod wire;
 pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
 pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
 pub use histogram::{EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE};
-pub use layer::{argmax, scores_from_evidence, Scores};
+pub use layer::{argmax, decide, scores_from_evidence, Scores};
 pub use math::{Backend, Libm};
 pub use name::{ClassName, NAME_MAX};
 pub use table::Table;
