@@ -14,6 +14,7 @@
 //! start-up or as constants generated at build time. The promises are checked: panic
 //! paths by a link-time test, allocation by `nm`, the invariants of every score by
 //! property tests and fuzzing (see the README).
+//! The mathematics, invariants, file formats and design decisions: `docs/DESIGN.md`.
 //!
 //! # Decoding a table at start-up
 //!

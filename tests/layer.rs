@@ -1,5 +1,5 @@
 //! The layer against the numpy reference, its error cases, the batch API and the exact
-//! "I don't know" answer (DESIGN §1.2, §1.3; issue 2 items 1, 2, 5, 7).
+//! "I don't know" answer (DESIGN §1.2, §1.3).
 
 use mlmap::{BatchError, InferError, Scores, Table, UpperTail};
 
@@ -586,7 +586,7 @@ mod dyn_table {
     }
 }
 
-/// The `FastMath` backend's worst-case error on a MAP score (issue 2, item 2).
+/// The `FastMath` backend's worst-case error on a MAP score.
 #[cfg(feature = "micromath")]
 mod fast_math {
     use mlmap::{FastMath, FAST_MATH_MAX_SCORE_ERROR};
@@ -715,7 +715,7 @@ mod fast_math {
 /// class's mass (`L + lambda == lambda` in `f32`; for MAP, a logit far in the prior's
 /// tail): the score must not drop below the no-evidence answer `OS / K`. With K >= 6
 /// and a lambda whose multiples round, a separate `OS / K` shortcut for "no evidence"
-/// and the general normalisation used to disagree by one ulp (regression test, issue 2).
+/// and the general normalisation used to disagree by one ulp (regression test).
 #[test]
 fn negligible_likelihood_never_lowers_the_score() {
     fn run<const K: usize>() -> usize {

@@ -11,7 +11,7 @@
 use mlmap::{ClassSpec, EdgeMode, InferError, Settings, Table, UpperTail};
 
 /// Largest absolute difference allowed between a score computed by the layer in `f32`
-/// with the default `Libm` backend and the float64 reference (issue 2, item 2).
+/// with the default `Libm` backend and the float64 reference.
 pub const GOLDEN_ABS_TOL: f64 = 1e-6;
 
 /// Relative tolerance on `sum_i s_i = OS` (DESIGN §1.3, invariant 1).

@@ -5,7 +5,7 @@ Cortex-M4F and the scores it must get, computed here in float64.
 This shares no code with the Rust crate: the table file is decoded here from
 docs/FORMAT.md (and checked by re-encoding it with tools/mlmap_ref.py), bins are found by
 comparing against the float32 edges the format defines, and ML and MAP are evaluated in
-float64 from DESIGN.md §1.2. The firmware checks its float32 results against these
+float64 from docs/DESIGN.md §1.2. The firmware checks its float32 results against these
 values within a tolerance, and exactly where the answer is `OS / K`.
 
     python3 tools/firmware_expected.py [TABLE] [OUT]     # defaults: tables/default.mlmap,

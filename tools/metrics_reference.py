@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent reference values for mlmap's host metrics and baselines.
 
-Written from DESIGN.md §1.4-§1.5 with numpy, scipy and scikit-learn only; it shares no
+Written from docs/DESIGN.md §1.4-§1.5 with numpy, scipy and scikit-learn only; it shares no
 code with the Rust crate, so agreement between the two is evidence for both. It builds
 small adversarial cases (ties in conf, empty ECE bins, confidences exactly on the bin
 edges 0.1 .. 1.0, conf 0 and 1, background rows, a class without positives, a single

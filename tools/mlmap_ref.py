@@ -1,14 +1,14 @@
 #!/usr/bin/env python3
 """An independent numpy implementation of mlmap's fit, table format and layer.
 
-It shares no code with the Rust crate: it is written from DESIGN.md and docs/FORMAT.md,
+It shares no code with the Rust crate: it is written from docs/DESIGN.md and docs/FORMAT.md,
 so agreement between the two is evidence for both. Used to write golden values
 (tests/golden/) and to cross-check tables written by `mlmap fit`.
 
     python3 tools/mlmap_ref.py fit examples/data/train.csv OUT.mlmap   # linspace, 22/17 bins
     python3 tools/mlmap_ref.py goldens tests/golden/layer              # layer goldens
 
-The layer half (decode, likelihood, prior, ML, MAP) follows DESIGN.md section 1.2 in
+The layer half (decode, likelihood, prior, ML, MAP) follows docs/DESIGN.md section 1.2 in
 float64: the table's stored float32 values are widened exactly, the inner bin edges are
 computed in float32 exactly as the format defines them (w = (hi - lo) / B,
 e_k = lo + k * w, no fused multiply-add), and the bin of a logit is found by
@@ -170,7 +170,7 @@ def decode(data):
 
 
 # ---------------------------------------------------------------------------------------
-# Inference (DESIGN.md section 1.2), float64.
+# Inference (docs/DESIGN.md section 1.2), float64.
 
 
 class InferenceError(ValueError):

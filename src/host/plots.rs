@@ -1,4 +1,4 @@
-//! The SVG plots of `mlmap eval --plots DIR` (issue 3, item 4; metrics of DESIGN §1.5).
+//! The SVG plots of `mlmap eval --plots DIR` (metrics of DESIGN §1.5).
 //!
 //! * [`reliability_diagram`]: accuracy per confidence bin against the diagonal, with the
 //!   ECE in the title and the rows per bin in a second panel.
