@@ -1,7 +1,7 @@
 //! The layers side by side, K = 3, on the shipped table (22 ML bins, 17 MAP bins):
-//! the Sigmoid and Softmax layers mlmap replaces, ML, MAP (libm) and MAP (FastMath,
-//! feature `micromath`), per detection and per batch of 4096 detections, and decoding
-//! the table.
+//! the Sigmoid and Softmax layers mlmap replaces, ML, MAP (libm), MAP (`FastMath`, the
+//! crate's own `exp`) and MAP (`Micromath`, feature `micromath`), per detection and per
+//! batch of 4096 detections, and decoding the table.
 //!
 //! ```text
 //! cargo bench --bench layer --features micromath
@@ -79,8 +79,10 @@ fn layers(c: &mut Criterion) {
     per_detection!("softmax", |x, o| softmax::<Libm, 3>(x, o));
     per_detection!("ml", |x, o| table.ml(x, o));
     per_detection!("map", |x, o| table.map(x, o));
-    #[cfg(feature = "micromath")]
     per_detection!("map_fast", |x, o| table.map_with::<mlmap::FastMath>(x, o));
+    #[cfg(feature = "micromath")]
+    per_detection!("map_micromath", |x, o| table
+        .map_with::<mlmap::Micromath>(x, o));
     g.finish();
 
     // A batch of 4096 detections per iteration. The baselines have no batch API: they
@@ -108,10 +110,15 @@ fn layers(c: &mut Criterion) {
     g.bench_function("map", |b| {
         b.iter(|| black_box(table.map_batch(black_box(&xs), Some(&os), &mut out)))
     });
-    #[cfg(feature = "micromath")]
     g.bench_function("map_fast", |b| {
         b.iter(|| {
             black_box(table.map_batch_with::<mlmap::FastMath>(black_box(&xs), Some(&os), &mut out))
+        })
+    });
+    #[cfg(feature = "micromath")]
+    g.bench_function("map_micromath", |b| {
+        b.iter(|| {
+            black_box(table.map_batch_with::<mlmap::Micromath>(black_box(&xs), Some(&os), &mut out))
         })
     });
     g.finish();
@@ -153,9 +160,12 @@ const INTERLEAVED: &[(&str, Option<f64>, Run)] = &[
     ("map", Some(1.25), |t, xs, os, out| {
         black_box(t.map_batch(xs, Some(os), out)).ok();
     }),
-    #[cfg(feature = "micromath")]
     ("map_fast", Some(0.75), |t, xs, os, out| {
         black_box(t.map_batch_with::<mlmap::FastMath>(xs, Some(os), out)).ok();
+    }),
+    #[cfg(feature = "micromath")]
+    ("map_micromath", None, |t, xs, os, out| {
+        black_box(t.map_batch_with::<mlmap::Micromath>(xs, Some(os), out)).ok();
     }),
 ];
 
@@ -175,7 +185,7 @@ fn interleaved_ratios(rounds: usize) {
     }
     println!("\nInterleaved, batches of {BATCH} detections, best of {rounds} rounds:");
     println!(
-        "  {:10} {:>13} {:>10}  goal",
+        "  {:14} {:>13} {:>10}  goal",
         "layer", "ns/detection", "/ sigmoid"
     );
     for ((name, goal, _), &ns) in INTERLEAVED.iter().zip(&best) {
@@ -185,7 +195,7 @@ fn interleaved_ratios(rounds: usize) {
             Some(g) => format!("<= {g}: MISSED"),
             None => String::new(),
         };
-        println!("  {name:10} {ns:13.2} {ratio:10.3}  {goal}");
+        println!("  {name:14} {ns:13.2} {ratio:10.3}  {goal}");
     }
 }
 

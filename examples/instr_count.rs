@@ -6,8 +6,10 @@
 //! cargo run --release --features micromath --example instr_count -- map 16384
 //! ```
 //!
-//! Kinds: `sigmoid`, `softmax`, `ml`, `map`, `map_fast`, `decode`, and `noop` (a layer
-//! that only copies the logits: the cost of the loop around the layer). The detections are
+//! Kinds: `sigmoid`, `softmax`, `ml`, `map`, `map_fast` (MAP with the `FastMath`
+//! backend), `map_micromath` (MAP with `Micromath`), `sigmoid_fast` (the Sigmoid layer
+//! with `FastMath`), `decode`, and `noop` (a layer that only copies the logits: the cost
+//! of the loop around the layer). The detections are
 //! the first 4096 rows of `examples/data/test.csv`, cycled in file order; use an N that
 //! is a multiple of 4096 so N and 2N see the same mix of rows.
 
@@ -15,7 +17,7 @@ use std::hint::black_box;
 use std::process::ExitCode;
 
 use mlmap::baseline::{sigmoid, softmax};
-use mlmap::{FastMath, InferError, Libm, Scores, Table};
+use mlmap::{FastMath, InferError, Libm, Micromath, Scores, Table};
 
 type Shipped = Table<3, 22, 17>;
 
@@ -26,7 +28,9 @@ const ROWS: usize = 4096;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
-        eprintln!("usage: instr_count noop|sigmoid|softmax|ml|map|map_fast|decode N");
+        eprintln!(
+            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|decode N"
+        );
         return ExitCode::from(2);
     };
     let table = Shipped::from_bytes(TABLE).expect("the shipped table decodes");
@@ -34,10 +38,12 @@ fn main() -> ExitCode {
     let layer: fn(&Shipped, &[f32; 3], f32) -> Result<Scores<3>, InferError> = match kind.as_str() {
         "noop" => |_, x, _| Ok(Scores(*x)),
         "sigmoid" => |_, x, o| sigmoid::<Libm, 3>(x, o),
+        "sigmoid_fast" => |_, x, o| sigmoid::<FastMath, 3>(x, o),
         "softmax" => |_, x, o| softmax::<Libm, 3>(x, o),
         "ml" => |t, x, o| t.ml(x, o),
         "map" => |t, x, o| t.map(x, o),
         "map_fast" => |t, x, o| t.map_with::<FastMath>(x, o),
+        "map_micromath" => |t, x, o| t.map_with::<Micromath>(x, o),
         "decode" => {
             let mut ok = 0usize;
             for _ in 0..n {

@@ -159,9 +159,15 @@ impl Format for crate::Libm {
     }
 }
 
-#[cfg(feature = "micromath")]
 impl Format for crate::FastMath {
     fn format(&self, f: Formatter<'_>) {
         write!(f, "FastMath")
+    }
+}
+
+#[cfg(feature = "micromath")]
+impl Format for crate::Micromath {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "Micromath")
     }
 }

@@ -43,7 +43,9 @@
 //!
 //! # Features
 //!
-//! * `micromath`: adds the [`FastMath`] backend (`table.map_with::<FastMath>(..)`).
+//! * `micromath`: adds the `Micromath` backend, micromath's `exp`
+//!   (`table.map_with::<Micromath>(..)`). The faster and more accurate [`FastMath`]
+//!   backend, the crate's own `exp`, needs no feature.
 //! * `defmt`: `defmt::Format` for every public type.
 //! * `std`: the host module [`host`] (fitting, datasets, metrics, [`DynTable`](host::DynTable)).
 //! * `cli`: the `mlmap` companion binary.
@@ -73,7 +75,6 @@ mod defmt_impls;
 mod dyn_table;
 pub mod embedded;
 mod error;
-#[cfg(feature = "micromath")]
 mod fastmath;
 mod gaussian;
 mod histogram;
@@ -92,9 +93,12 @@ pub use name::{ClassName, NAME_MAX};
 pub use table::Table;
 pub use wire::{max_encoded_len, ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
 
+pub use fastmath::{
+    fast_math_max_score_error, FastMath, FAST_MATH_MAX_REL_ERROR, FAST_MATH_MAX_SCORE_ERROR,
+};
 #[cfg(feature = "micromath")]
 #[cfg_attr(docsrs, doc(cfg(feature = "micromath")))]
-pub use fastmath::{FastMath, FAST_MATH_MAX_SCORE_ERROR};
+pub use fastmath::{Micromath, MICROMATH_MAX_SCORE_ERROR};
 
 #[cfg(feature = "std")]
 #[cfg_attr(docsrs, doc(cfg(feature = "std")))]

@@ -14,7 +14,7 @@ import os
 import subprocess
 import sys
 
-LAYERS = ["sigmoid", "softmax", "ml", "map", "map_fast"]
+LAYERS = ["sigmoid", "softmax", "ml", "map", "map_fast", "map_micromath"]
 GOALS = {"ml": 0.5, "map": 1.25, "map_fast": 0.75}  # at most this many times the Sigmoid layer
 GROUPS = {"detection": 1, "batch4096": 4096}
 

@@ -6,9 +6,11 @@
 #   tools/callgrind_counts.sh            # N = 16384 (a multiple of the 4096 test rows)
 #   N=4096 tools/callgrind_counts.sh
 #
-# Prints one line per kind, and the ratios to the Sigmoid layer, both gross and net of
-# the loop around the layer (kind `noop`: fetch a row, call through a function pointer,
-# fold the result into a checksum).
+# Prints one line per kind, and the ratios to the Sigmoid layer (libm), both gross and net
+# of the loop around the layer (kind `noop`: fetch a row, call through a function pointer,
+# fold the result into a checksum). Kinds: the Sigmoid layer with libm and with FastMath,
+# Softmax, ML, MAP with libm (`map`), FastMath (`map_fast`) and Micromath
+# (`map_micromath`), and decoding.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -27,15 +29,15 @@ count() {
 }
 
 declare -A per
-printf '%-10s %14s %14s %12s\n' kind "Ir(N=$n)" "Ir(2N)" "Ir/detection"
-for kind in noop sigmoid softmax ml map map_fast decode; do
+printf '%-14s %14s %14s %12s\n' kind "Ir(N=$n)" "Ir(2N)" "Ir/detection"
+for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath decode; do
     a="$(count "$kind" "$n")"
     b="$(count "$kind" "$((2 * n))")"
     per[$kind]="$(python3 -c "print(f'{($b - $a) / $n:.1f}')")"
-    printf '%-10s %14s %14s %12s\n' "$kind" "$a" "$b" "${per[$kind]}"
+    printf '%-14s %14s %14s %12s\n' "$kind" "$a" "$b" "${per[$kind]}"
 done
 echo
-for kind in softmax ml map map_fast; do
+for kind in sigmoid_fast softmax ml map map_fast map_micromath; do
     python3 -c "
 g, s, n = ${per[$kind]}, ${per[sigmoid]}, ${per[noop]}
 print(f'$kind / sigmoid = {g / s:.3f} (net of the loop: {(g - n) / (s - n):.3f})')"
