@@ -62,38 +62,26 @@
     )
 )]
 
-#[cfg(any(test, feature = "std"))]
+#[cfg(feature = "std")]
 extern crate std;
 
-pub mod baseline;
-#[cfg(feature = "defmt")]
-mod defmt_impls;
-#[cfg(feature = "std")]
-mod dyn_table;
-pub mod embedded;
-mod error;
-#[cfg(feature = "micromath")]
-mod fastmath;
-mod gaussian;
-mod histogram;
-mod layer;
-mod math;
-mod name;
-mod table;
-mod wire;
+pub use mlmap_core::baseline;
+pub use mlmap_core::{
+    argmax, decide, scores_from_evidence, Axis, Backend, BatchError, BayesView, ClassName,
+    ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head, Histogram,
+    HistogramError, InferError, Libm, Scores, Settings, Table, TableError, TableView,
+    UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_LAMBDA, MAX_LAMBDA_BAYES,
+    NAME_MAX, VARIANCE_FLOOR,
+};
 
-pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
-pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
-pub use histogram::{EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE};
-pub use layer::{argmax, decide, scores_from_evidence, Scores};
-pub use math::{Backend, Libm};
-pub use name::{ClassName, NAME_MAX};
-pub use table::Table;
-pub use wire::{max_encoded_len, ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
+pub mod embedded;
+
+#[doc(hidden)]
+pub use mlmap_core::__embed;
 
 #[cfg(feature = "micromath")]
 #[cfg_attr(docsrs, doc(cfg(feature = "micromath")))]
-pub use fastmath::{FastMath, FAST_MATH_MAX_SCORE_ERROR};
+pub use mlmap_core::{FastMath, FAST_MATH_MAX_SCORE_ERROR};
 
 #[cfg(feature = "std")]
 #[cfg_attr(docsrs, doc(cfg(feature = "std")))]
