@@ -23,7 +23,7 @@
 //! // E.g. a calibration flash sector, updatable without reflashing the code.
 //! static TABLE_BYTES: &[u8] = include_bytes!("../tables/default.mlmap");
 //!
-//! let table = Table::<3, 22, 17>::from_bytes(TABLE_BYTES)?; // CRC + invariants checked
+//! let table = Table::<3, 22, 17, 22, 4>::from_bytes(TABLE_BYTES)?; // CRC + invariants checked
 //! let scores = table.map(&[5.1, -2.0, -1.3], 0.93)?;
 //! let class = table.class_name(scores.argmax());
 //! # assert!(class.is_some());
@@ -69,9 +69,9 @@ pub use mlmap_core::baseline;
 pub use mlmap_core::{
     argmax, decide, scores_from_evidence, Axis, Backend, BatchError, BayesView, ClassName,
     ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head, Histogram,
-    HistogramError, InferError, Libm, Scores, Settings, Table, TableError, TableView,
-    UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_LAMBDA, MAX_LAMBDA_BAYES,
-    NAME_MAX, VARIANCE_FLOOR,
+    HistogramError, InferError, Libm, Scores, Settings, Table, TableError, TableView, UpperTail,
+    FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_LAMBDA, MAX_LAMBDA_BAYES, NAME_MAX,
+    VARIANCE_FLOOR,
 };
 
 pub mod embedded;

@@ -143,7 +143,9 @@ impl<'a> BayesView<'a> {
             .zip(self.terms.chunks_exact(k * b))
         {
             let mut sum = prior;
-            for ((axis, &x), logit_terms) in self.axes.iter().zip(logits).zip(cat_terms.chunks_exact(b)) {
+            for ((axis, &x), logit_terms) in
+                self.axes.iter().zip(logits).zip(cat_terms.chunks_exact(b))
+            {
                 sum += match axis.bin(x) {
                     Some(bin) => logit_terms.get(bin).copied().unwrap_or(self.log_lambda),
                     None => self.log_lambda,

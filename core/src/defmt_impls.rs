@@ -53,7 +53,11 @@ impl Format for DecodeError {
                 write!(f, "ShapeMismatch(expected {}, found {})", expected, found)
             }
             Self::BayesShapeMismatch { expected, found } => {
-                write!(f, "BayesShapeMismatch(expected {}, found {})", expected, found)
+                write!(
+                    f,
+                    "BayesShapeMismatch(expected {}, found {})",
+                    expected, found
+                )
             }
             Self::Malformed => write!(f, "Malformed"),
             Self::Invalid(e) => write!(f, "Invalid({})", e),
@@ -146,8 +150,13 @@ impl<const K: usize> Format for Scores<K> {
     }
 }
 
-impl<const K: usize, const B_ML: usize, const B_MAP: usize, const B_BAYES: usize, const C: usize>
-    Format for Table<K, B_ML, B_MAP, B_BAYES, C>
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+    > Format for Table<K, B_ML, B_MAP, B_BAYES, C>
 {
     fn format(&self, f: Formatter<'_>) {
         write!(

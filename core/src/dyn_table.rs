@@ -105,7 +105,7 @@ impl DynTable {
         let k = self.k();
         let categories = spec.rows.len();
         let bins = match categories.checked_mul(k) {
-            Some(n) if n > 0 && spec.terms.len() % n == 0 => spec.terms.len() / n,
+            Some(n) if n > 0 && spec.terms.len().is_multiple_of(n) => spec.terms.len() / n,
             _ => return Err(TableError::BayesShape),
         };
         if spec.ranges.len() != k || bins > usize::from(u16::MAX) {
@@ -353,7 +353,8 @@ impl DynTable {
         out: &mut [f32],
         scratch: &mut [f32],
     ) -> Result<(), InferError> {
-        self.view().bayes_into::<M>(logits, objectness, out, scratch)
+        self.view()
+            .bayes_into::<M>(logits, objectness, out, scratch)
     }
 
     /// The run-time shaped copy of a fixed-size table.
@@ -396,8 +397,13 @@ fn to_vec_hist<const B: usize>(h: &Histogram<[f32; B]>) -> Histogram<Vec<f32>> {
     }
 }
 
-impl<const K: usize, const B_ML: usize, const B_MAP: usize, const B_BAYES: usize, const C: usize>
-    TryFrom<&DynTable> for crate::Table<K, B_ML, B_MAP, B_BAYES, C>
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+    > TryFrom<&DynTable> for crate::Table<K, B_ML, B_MAP, B_BAYES, C>
 {
     type Error = DecodeError;
 

@@ -79,4 +79,3 @@ pub const fn table<
         bayes_log_lambda,
     }
 }
-

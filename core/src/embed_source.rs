@@ -45,8 +45,16 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
         ("Number of classes of the embedded table.", "K", k),
         ("ML bins of the embedded table.", "BINS_ML", v.bins_ml()),
         ("MAP bins of the embedded table.", "BINS_MAP", v.bins_map()),
-        ("Bayes bins of the embedded table (0: no Bayes head).", "BINS_BAYES", bins_bayes),
-        ("Bayes categories of the embedded table (0: no Bayes head).", "CATEGORIES", categories),
+        (
+            "Bayes bins of the embedded table (0: no Bayes head).",
+            "BINS_BAYES",
+            bins_bayes,
+        ),
+        (
+            "Bayes categories of the embedded table (0: no Bayes head).",
+            "CATEGORIES",
+            categories,
+        ),
     ];
     for (doc, name, value) in consts {
         let _ = writeln!(s, "/// {doc}\npub const {name}: usize = {value};");
@@ -55,8 +63,14 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
         s,
         "/// The type of [`TABLE`].\npub type EmbeddedTable = {krate}::Table<K, BINS_ML, BINS_MAP, BINS_BAYES, CATEGORIES>;"
     );
-    let _ = writeln!(s, "/// The file the table was embedded from.\npub const SOURCE: &str = {source:?};");
-    let _ = writeln!(s, "/// The embedded file's bytes (for checks; firmware needs only [`TABLE`]).");
+    let _ = writeln!(
+        s,
+        "/// The file the table was embedded from.\npub const SOURCE: &str = {source:?};"
+    );
+    let _ = writeln!(
+        s,
+        "/// The embedded file's bytes (for checks; firmware needs only [`TABLE`])."
+    );
     let _ = writeln!(s, "pub static BYTES: [u8; {}] = {:?};", bytes.len(), bytes);
     let names: Vec<String> = v
         .names

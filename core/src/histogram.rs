@@ -258,7 +258,6 @@ fn locate(lo: f32, width: f32, inv_width: f32, last: usize, x: f32) -> usize {
     k
 }
 
-
 /// The equal-width bins of one logit, without frequencies: the support of a Bayes head's
 /// per-logit histograms ([`crate::BayesView`]), with the same edges and the same lookup
 /// rule as a [`Histogram`].

@@ -61,7 +61,9 @@ mod wire;
 pub use bayes::{BayesView, MAX_LAMBDA_BAYES};
 pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
 pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
-pub use histogram::{Axis, EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE};
+pub use histogram::{
+    Axis, EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE,
+};
 pub use layer::{argmax, decide, scores_from_evidence, Scores};
 pub use math::{Backend, Libm};
 pub use name::{ClassName, NAME_MAX};

@@ -293,15 +293,19 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
                 return Err(TableError::BayesShape.into());
             }
             *b.lambda = lambda;
-            *b.log_lambda =
-                bayes::validate(k, bins, lambda, b.axes, b.terms, b.rows, b.log_prior)?;
+            *b.log_lambda = bayes::validate(k, bins, lambda, b.axes, b.terms, b.rows, b.log_prior)?;
         }
         Ok(())
     }
 
     /// Validates class `i` as parsed (raw fields, frequencies in place), with the checks
     /// of [`ClassSpec`]; fills in its name and the derived fields.
-    fn validate_class(&mut self, i: usize, bins_ml: usize, bins_map: usize) -> Result<(), TableError> {
+    fn validate_class(
+        &mut self,
+        i: usize,
+        bins_ml: usize,
+        bins_map: usize,
+    ) -> Result<(), TableError> {
         let (Some(ml), Some(map), Some(prior), Some(&rows), Some(&name)) = (
             self.ml.get(i),
             self.map.get(i),

@@ -404,7 +404,9 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     let mut de = postcard::Deserializer::from_bytes(body);
     // A struct is its fields in order: the settings, then the class sequence.
     let settings = SettingsWire::deserialize(&mut de).map_err(malformed)?;
-    let classes = ClassesSeed(&mut *sink).deserialize(&mut de).map_err(malformed)?;
+    let classes = ClassesSeed(&mut *sink)
+        .deserialize(&mut de)
+        .map_err(malformed)?;
     let bayes = if bayes {
         let lambda = f32::deserialize(&mut de).map_err(malformed)?;
         let slots = sink.bayes();
@@ -617,7 +619,11 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
         let mut t = s.serialize_tuple(13)?;
         t.serialize_element(&MAGIC)?;
         let bayes = view.bayes();
-        t.serialize_element(&if bayes.is_some() { FORMAT_VERSION } else { VERSION_1 })?;
+        t.serialize_element(&if bayes.is_some() {
+            FORMAT_VERSION
+        } else {
+            VERSION_1
+        })?;
         t.serialize_element(&narrow(k))?;
         t.serialize_element(&narrow(view.bins_ml()))?;
         t.serialize_element(&narrow(view.bins_map()))?;
@@ -754,7 +760,7 @@ mod tests {
     /// The shipped table with the first class's row count rewritten as an overlong
     /// varint (one byte more than needed) and the CRC recomputed.
     fn overlong_rows() -> Vec<u8> {
-        let bytes = include_bytes!("../../tables/default.mlmap");
+        let bytes = include_bytes!("../../tests/golden/train_linspace.mlmap");
         // magic, version/K/bins (one byte each), settings, K, name length, "car", rows.
         let rows_at = 4 + 4 + 10 + 1 + 1 + 3;
         assert_eq!(&bytes[rows_at - 3..rows_at], b"car");
@@ -772,7 +778,7 @@ mod tests {
     /// decoded to a table whose own encoding is different (two files for one table).
     #[test]
     fn non_canonical_varint_is_rejected() {
-        let bytes = include_bytes!("../../tables/default.mlmap");
+        let bytes = include_bytes!("../../tests/golden/train_linspace.mlmap");
         let table = crate::Table::<3, 22, 17>::from_bytes(bytes).unwrap();
         let mut buf = [0u8; crate::Table::<3, 22, 17>::MAX_ENCODED_LEN];
         assert_eq!(table.to_slice(&mut buf).unwrap(), &bytes[..]);

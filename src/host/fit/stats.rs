@@ -183,6 +183,11 @@ impl BinCounter {
         })
     }
 
+    /// Number of bins.
+    pub(crate) fn bins(&self) -> usize {
+        self.counts.len()
+    }
+
     /// Counts `x`; `false` when it is outside `[lo, hi]`.
     ///
     /// The bin is the one the layer looks `x` up in ([`Axis::bin`], the lookup of

@@ -83,6 +83,10 @@ pub fn run(args: &FitArgs) -> Result<()> {
         lambda_map: args.lambda_map,
         edges: super::edge_mode(args.edges),
         upper_tail: super::upper_tail(args.upper_tail),
+        bayes: (!args.no_bayes).then_some(fit::BayesParams {
+            bins: args.bins_bayes,
+            lambda: args.lambda_bayes,
+        }),
     };
     let train = &args.train;
     params.validate().map_err(|e| fit_error(train, e))?;

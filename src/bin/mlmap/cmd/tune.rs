@@ -128,6 +128,12 @@ pub fn search(
     };
     let table = build_table(train.moments(), &ml, &map, settings)
         .map_err(|e| fit_error(train.path(), e))?;
+    // The Bayes head with its fit defaults (not tuned yet).
+    let bayes = mlmap::host::fit::BayesParams::default();
+    let table = train
+        .bayes_counts(bayes.bins)
+        .and_then(|counts| mlmap::host::fit::with_bayes(table, &counts, bayes.lambda))
+        .map_err(|e| fit_error(train.path(), e))?;
     Ok((result, table))
 }
 
