@@ -59,7 +59,7 @@ use std::vec::Vec;
 
 use crate::host::dataset::{DataError, DataSource, Label, Row};
 use crate::host::DynTable;
-use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
+use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA, VARIANCE_FLOOR};
 
 pub use bayes::{BayesCounts, BayesMoments, BayesParams};
 pub use stats::{ClassHistogram, ClassMoments};
@@ -512,6 +512,58 @@ pub fn build_table(
         });
     }
     DynTable::new(settings, specs).map_err(FitError::Table)
+}
+
+/// Something legal but suspicious about a fitted table, worth telling the user.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum FitWarning {
+    /// The class has one training row, or all its rows have the same logit: its sample
+    /// variance is 0 and the prior's variance is the floor.
+    DegeneratePrior {
+        /// The class.
+        class: String,
+        /// Its training rows.
+        rows: u64,
+        /// The prior's mean (the class's one training value).
+        mean: f32,
+    },
+}
+
+impl fmt::Display for FitWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::DegeneratePrior { class, rows, mean } => {
+                let why = if *rows == 1 {
+                    "has a single training row".to_string()
+                } else {
+                    std::format!("has {rows} training rows with the same logit")
+                };
+                write!(
+                    f,
+                    "class {class:?} {why}: its sample variance is 0, floored to {VARIANCE_FLOOR:e}, \
+                     so its MAP prior is a spike at {mean}: MAP gives the class evidence only for \
+                     logits within about 1e-5 of that value, and lambda alone elsewhere; \
+                     collect more rows for it, or rely on the ML or Bayes head"
+                )
+            }
+        }
+    }
+}
+
+/// The warnings of a fitted table (see [`FitWarning`]).
+pub fn warnings(table: &DynTable) -> Vec<FitWarning> {
+    table
+        .class_names()
+        .zip(table.rows())
+        .zip(table.priors())
+        .filter(|(_, p)| f64::from(p.variance()) <= VARIANCE_FLOOR)
+        .map(|((name, &rows), p)| FitWarning::DegeneratePrior {
+            class: name.to_string(),
+            rows,
+            mean: p.mean(),
+        })
+        .collect()
 }
 
 /// The training values of every class, held in memory, for fitting many tables from

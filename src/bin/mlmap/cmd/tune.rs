@@ -239,7 +239,7 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         tail: super::upper_tail(a.upper_tail),
         detail: a.top,
     };
-    output::check_target(&a.output)?;
+    output::check_outputs(&a.output, &[&a.train, &a.val])?;
     let train = TrainingSet::read(&load::open(&a.train)?).map_err(|e| fit_error(&a.train, e))?;
     let val = load::load(&a.val)?;
     let (result, table) = search(&train, &val, &a.val, &grid)?;
