@@ -27,7 +27,7 @@ use criterion::{criterion_group, Criterion, Throughput};
 use mlmap::baseline::{sigmoid, softmax};
 use mlmap::{Libm, Table};
 
-type Shipped = Table<3, 22, 17>;
+type Shipped = Table<3, 22, 17, 22, 4>;
 
 const TABLE: &[u8] = include_bytes!("../tables/default.mlmap");
 const TEST_CSV: &str = include_str!("../examples/data/test.csv");

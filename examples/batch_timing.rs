@@ -2,7 +2,7 @@
 //! `tools/bench_vs_numpy.sh`.
 //!
 //! Loads `logits.npy` and `objectness.npy` (not timed), decodes the table as
-//! `Table<3, 22, 17>`, then runs [`Table::ml_batch`] and [`Table::map_batch`] over every
+//! `Table<3, 22, 17, 22, 4>`, then runs [`Table::ml_batch`] and [`Table::map_batch`] over every
 //! row, several times, and prints the medians on one `key=value` line (with the feature
 //! `micromath`, also `map_fast_s`: [`Table::map_batch_with`] and the `FastMath` backend):
 //!
@@ -22,7 +22,7 @@ use mlmap::host::dataset::DataSource;
 use mlmap::Table;
 
 /// The shape of the shipped table: 3 classes, 22 ML bins, 17 MAP bins.
-type Calibration = Table<3, 22, 17>;
+type Calibration = Table<3, 22, 17, 22, 4>;
 const K: usize = 3;
 
 struct Args {

@@ -11,7 +11,7 @@
 use mlmap::{DecodeError, Table};
 
 /// The shape this firmware was built for: 3 classes, 22 ML bins, 17 MAP bins.
-type Calibration = Table<3, 22, 17>;
+type Calibration = Table<3, 22, 17, 22, 4>;
 
 fn main() {
     let path = std::env::args()

@@ -19,7 +19,7 @@ use std::process::ExitCode;
 use mlmap::baseline::{sigmoid, softmax};
 use mlmap::{FastMath, InferError, Libm, Micromath, Scores, Table};
 
-type Shipped = Table<3, 22, 17>;
+type Shipped = Table<3, 22, 17, 22, 4>;
 
 const TABLE: &[u8] = include_bytes!("../tables/default.mlmap");
 const TEST_CSV: &str = include_str!("data/test.csv");

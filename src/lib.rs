@@ -24,7 +24,7 @@
 //! // E.g. a calibration flash sector, updatable without reflashing the code.
 //! static TABLE_BYTES: &[u8] = include_bytes!("../tables/default.mlmap");
 //!
-//! let table = Table::<3, 22, 17>::from_bytes(TABLE_BYTES)?; // CRC + invariants checked
+//! let table = Table::<3, 22, 17, 22, 4>::from_bytes(TABLE_BYTES)?; // CRC + invariants checked
 //! let scores = table.map(&[5.1, -2.0, -1.3], 0.93)?;
 //! let class = table.class_name(scores.argmax());
 //! # assert!(class.is_some());
@@ -65,40 +65,29 @@
     )
 )]
 
-#[cfg(any(test, feature = "std"))]
+#[cfg(feature = "std")]
 extern crate std;
 
-pub mod baseline;
-#[cfg(feature = "defmt")]
-mod defmt_impls;
-#[cfg(feature = "std")]
-mod dyn_table;
+pub use mlmap_core::baseline;
+pub use mlmap_core::{
+    argmax, decide, scores_from_evidence, Axis, Backend, BatchError, BayesView, ClassName,
+    ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head, Histogram,
+    HistogramError, InferError, Libm, Scores, Settings, Table, TableError, TableView, UpperTail,
+    FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_LAMBDA, MAX_LAMBDA_BAYES, NAME_MAX,
+    VARIANCE_FLOOR,
+};
+
 pub mod embedded;
-mod error;
-mod fastmath;
-mod gaussian;
-mod histogram;
-mod layer;
-mod math;
-mod name;
-mod table;
-mod wire;
 
-pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
-pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
-pub use histogram::{EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE};
-pub use layer::{argmax, decide, scores_from_evidence, Scores};
-pub use math::{Backend, Libm};
-pub use name::{ClassName, NAME_MAX};
-pub use table::Table;
-pub use wire::{max_encoded_len, ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
+#[doc(hidden)]
+pub use mlmap_core::__embed;
 
-pub use fastmath::{
+pub use mlmap_core::{
     fast_math_max_score_error, FastMath, FAST_MATH_MAX_REL_ERROR, FAST_MATH_MAX_SCORE_ERROR,
 };
 #[cfg(feature = "micromath")]
 #[cfg_attr(docsrs, doc(cfg(feature = "micromath")))]
-pub use fastmath::{Micromath, MICROMATH_MAX_SCORE_ERROR};
+pub use mlmap_core::{Micromath, MICROMATH_MAX_SCORE_ERROR};
 
 #[cfg(feature = "std")]
 #[cfg_attr(docsrs, doc(cfg(feature = "std")))]

@@ -9,7 +9,10 @@ use crate::support::{
 };
 
 /// Checks one golden row against `table`; returns the largest score error seen.
-fn check_golden<const BM: usize, const BP: usize>(table: &Table<3, BM, BP>, g: &Golden) -> f64 {
+fn check_golden<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
+    table: &Table<3, BM, BP, BB, C>,
+    g: &Golden,
+) -> f64 {
     let what = format!(
         "{} / {} / logits {:?} / objectness {}",
         g.table, g.case, g.logits, g.objectness
@@ -485,7 +488,7 @@ fn embedded_table_is_the_decoded_file() {
 #[test]
 fn autotraits() {
     fn has_autotraits<T: Send + Sync + Unpin>() {}
-    has_autotraits::<Table<3, 22, 17>>();
+    has_autotraits::<Table<3, 22, 17, 22, 4>>();
     has_autotraits::<Table<2, 1, 1>>();
     has_autotraits::<Scores<3>>();
     has_autotraits::<mlmap::DecodeError>();
@@ -525,7 +528,10 @@ mod dyn_table {
         v
     }
 
-    fn agree<const BM: usize, const BP: usize>(t: &Table<3, BM, BP>, d: &DynTable) {
+    fn agree<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
+        t: &Table<3, BM, BP, BB, C>,
+        d: &DynTable,
+    ) {
         let mut out = [0.0f32; 3];
         let mut scratch = [0.0f32; 3];
         for (x, os) in inputs() {

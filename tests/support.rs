@@ -20,7 +20,7 @@ pub const SUM_REL_TOL: f64 = 1e-5;
 /// Shape of the hand-checkable table: 3 classes, 4 ML bins, 2 MAP bins.
 pub type Small = Table<3, 4, 2>;
 /// Shape of the shipped table `tables/default.mlmap`.
-pub type Shipped = Table<3, 22, 17>;
+pub type Shipped = Table<3, 22, 17, 22, 4>;
 
 /// `tests/golden/layer/small.mlmap`, written by the reference encoder.
 pub const SMALL_MLMAP: &[u8] = include_bytes!("golden/layer/small.mlmap");

@@ -32,7 +32,7 @@ fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
 
 /// The shape of the shipped table.
 #[cfg(not(feature = "baseline"))]
-type Calibration = mlmap::Table<3, 22, 17>;
+type Calibration = mlmap::Table<3, 22, 17, 22, 4>;
 
 /// Decoding at start-up; the caller keeps the table.
 #[cfg(not(feature = "baseline"))]

@@ -16,7 +16,7 @@ use mlmap::{
 pub const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
 
 /// The shape of [`SHIPPED`].
-pub type Shipped = Table<3, 22, 17>;
+pub type Shipped = Table<3, 22, 17, 22, 4>;
 
 /// The smallest positive `f32` (a subnormal): the absolute rounding slack of any `f32`
 /// result in the subnormal range, where `f32` has no relative precision left.

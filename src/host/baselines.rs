@@ -12,7 +12,7 @@
 use core::fmt;
 use std::vec::Vec;
 
-use crate::error::InferError;
+use crate::InferError;
 
 /// Probability floor of the negative log-likelihood, `-ln(max(s_label, NLL_FLOOR))`
 /// (DESIGN §1.5); shared with [`metrics`](super::metrics).

@@ -48,6 +48,7 @@
 //! double edges; the table counts `f32` values against `f32` edges, which can differ
 //! only for a value within an `f32` rounding of an edge.
 
+mod bayes;
 mod binpicker;
 mod stats;
 
@@ -58,8 +59,9 @@ use std::vec::Vec;
 
 use crate::host::dataset::{DataError, DataSource, Label, Row};
 use crate::host::DynTable;
-use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
+use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA, VARIANCE_FLOOR};
 
+pub use bayes::{BayesCounts, BayesMoments, BayesParams};
 pub use stats::{ClassHistogram, ClassMoments};
 
 use stats::BinCounter;
@@ -79,6 +81,7 @@ pub const MAX_BINS: usize = u16::MAX as usize;
 /// | `lambda_map` | 0.00012 | additive smoothing of the MAP head | `(0, 1e6]` |
 /// | `edges` | `Linspace` | how bin edges are placed | `Linspace`, `Matlab` |
 /// | `upper_tail` | `Zero` | likelihood above the last edge (recorded in the table) | `Zero`, `Clamp` |
+/// | `bayes` | `Some(BayesParams::default())` | the Bayes head's bins and lambda; `None` fits none | see [`BayesParams`] |
 ///
 /// The defaults are the authors' detection settings (DESIGN §1.1). Very large bin
 /// counts may make the `f32` frequencies miss the table's sum tolerance, and are
@@ -97,6 +100,8 @@ pub struct FitParams {
     pub edges: EdgeMode,
     /// Upper-tail policy, recorded in the table's settings.
     pub upper_tail: UpperTail,
+    /// The Bayes head's parameters, or `None` for a table without that head.
+    pub bayes: Option<BayesParams>,
 }
 
 impl Default for FitParams {
@@ -108,6 +113,7 @@ impl Default for FitParams {
             lambda_map: 0.00012,
             edges: EdgeMode::Linspace,
             upper_tail: UpperTail::Zero,
+            bayes: Some(BayesParams::default()),
         }
     }
 }
@@ -144,7 +150,8 @@ impl FitParams {
         bins("bins_ml", self.bins_ml)?;
         bins("bins_map", self.bins_map)?;
         lambda("lambda_ml", self.lambda_ml)?;
-        lambda("lambda_map", self.lambda_map)
+        lambda("lambda_map", self.lambda_map)?;
+        self.bayes.as_ref().map_or(Ok(()), BayesParams::validate)
     }
 
     /// The table settings these parameters give.
@@ -343,18 +350,31 @@ fn empty_moments(source: &DataSource) -> Vec<ClassMoments> {
 /// [`FitError::Data`] for unreadable data, [`FitError::NoLabels`] for unlabelled data,
 /// [`FitError::EmptyClasses`] when a class has no training rows.
 pub fn class_moments(source: &DataSource) -> Result<Vec<ClassMoments>, FitError> {
+    Ok(pass_1(source, false)?.0)
+}
+
+/// Pass 1: the moments of every class and, when `bayes`, the Bayes head's extremes and
+/// category rows.
+fn pass_1(
+    source: &DataSource,
+    bayes: bool,
+) -> Result<(Vec<ClassMoments>, Option<BayesMoments>), FitError> {
     require_labels(source)?;
     let mut moments = empty_moments(source);
+    let mut bayes = bayes.then(|| BayesMoments::new(source.classes()));
     source.for_each_row(|row| {
         if let Some((c, x)) = class_value(&row) {
             if let Some(m) = moments.get_mut(c) {
                 m.push(x);
             }
         }
+        if let Some(b) = &mut bayes {
+            b.push(&row);
+        }
         Ok::<(), FitError>(())
     })?;
     require_rows(source.path(), &moments)?;
-    Ok(moments)
+    Ok((moments, bayes))
 }
 
 /// A counter over the histogram range of class `m`.
@@ -395,9 +415,13 @@ fn counters(
 /// cannot hold; [`FitError::Changed`] if the input changes between the passes.
 pub fn fit(source: &DataSource, params: &FitParams) -> Result<DynTable, FitError> {
     params.validate()?;
-    let moments = class_moments(source)?;
+    let (moments, bayes_moments) = pass_1(source, params.bayes.is_some())?;
     let mut ml = counters(&moments, params.bins_ml, params.edges)?;
     let mut map = counters(&moments, params.bins_map, params.edges)?;
+    let mut bayes = match (&bayes_moments, &params.bayes) {
+        (Some(m), Some(p)) => Some(m.counters(p.bins)?),
+        _ => None,
+    };
     let mut outside = false;
     source.for_each_row(|row| {
         if let Some((c, x)) = class_value(&row) {
@@ -406,6 +430,9 @@ pub fn fit(source: &DataSource, params: &FitParams) -> Result<DynTable, FitError
                 let (in_a, in_b) = (a.add(x), b.add(x));
                 outside |= !(in_a && in_b);
             }
+        }
+        if let Some(b) = &mut bayes {
+            outside |= !b.add(&row);
         }
         Ok::<(), FitError>(())
     })?;
@@ -416,12 +443,36 @@ pub fn fit(source: &DataSource, params: &FitParams) -> Result<DynTable, FitError
         .zip(&ml)
         .zip(&map)
         .all(|((m, a), b)| a.total() == m.count() && b.total() == m.count());
+    let changed = || FitError::Changed {
+        path: source.path().to_path_buf(),
+    };
     if outside || !same_rows {
-        return Err(FitError::Changed {
-            path: source.path().to_path_buf(),
-        });
+        return Err(changed());
     }
-    build_table(&moments, &ml, &map, params.settings())
+    let table = build_table(&moments, &ml, &map, params.settings())?;
+    match (bayes, params.bayes) {
+        (Some(counters), Some(p)) => {
+            let counts = counters.finish().ok_or_else(changed)?;
+            with_bayes(table, &counts, p.lambda)
+        }
+        _ => Ok(table),
+    }
+}
+
+/// `table` with the Bayes head of `counts` smoothed by `lambda`.
+///
+/// # Errors
+///
+/// [`FitError::Table`] when the head breaks an invariant of §1.6 (e.g. a lambda out of
+/// range, or counts for another number of classes).
+pub fn with_bayes(
+    table: DynTable,
+    counts: &BayesCounts,
+    lambda: f32,
+) -> Result<DynTable, FitError> {
+    table
+        .with_bayes(counts.spec(lambda))
+        .map_err(FitError::Table)
 }
 
 /// Assembles a table from per-class moments and the histograms of both heads (one of
@@ -463,6 +514,58 @@ pub fn build_table(
     DynTable::new(settings, specs).map_err(FitError::Table)
 }
 
+/// Something legal but suspicious about a fitted table, worth telling the user.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum FitWarning {
+    /// The class has one training row, or all its rows have the same logit: its sample
+    /// variance is 0 and the prior's variance is the floor.
+    DegeneratePrior {
+        /// The class.
+        class: String,
+        /// Its training rows.
+        rows: u64,
+        /// The prior's mean (the class's one training value).
+        mean: f32,
+    },
+}
+
+impl fmt::Display for FitWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::DegeneratePrior { class, rows, mean } => {
+                let why = if *rows == 1 {
+                    "has a single training row".to_string()
+                } else {
+                    std::format!("has {rows} training rows with the same logit")
+                };
+                write!(
+                    f,
+                    "class {class:?} {why}: its sample variance is 0, floored to {VARIANCE_FLOOR:e}, \
+                     so its MAP prior is a spike at {mean}: MAP gives the class evidence only for \
+                     logits within about 1e-5 of that value, and lambda alone elsewhere; \
+                     collect more rows for it, or rely on the ML or Bayes head"
+                )
+            }
+        }
+    }
+}
+
+/// The warnings of a fitted table (see [`FitWarning`]).
+pub fn warnings(table: &DynTable) -> Vec<FitWarning> {
+    table
+        .class_names()
+        .zip(table.rows())
+        .zip(table.priors())
+        .filter(|(_, p)| f64::from(p.variance()) <= VARIANCE_FLOOR)
+        .map(|((name, &rows), p)| FitWarning::DegeneratePrior {
+            class: name.to_string(),
+            rows,
+            mean: p.mean(),
+        })
+        .collect()
+}
+
 /// The training values of every class, held in memory, for fitting many tables from
 /// one read of the data (hyper-parameter tuning).
 ///
@@ -474,6 +577,12 @@ pub struct TrainingSet {
     moments: Vec<ClassMoments>,
     /// `v_c` of each class as `f32`, sorted ascending.
     values: Vec<Vec<f32>>,
+    /// Extremes and category rows of the Bayes head.
+    bayes: BayesMoments,
+    /// Every labelled row's K logits as `f32`, row-major, and its category (K is
+    /// background), for Bayes counts at any bin count.
+    logits: Vec<f32>,
+    categories: Vec<usize>,
 }
 
 impl TrainingSet {
@@ -486,12 +595,20 @@ impl TrainingSet {
         require_labels(source)?;
         let mut moments = empty_moments(source);
         let mut values: Vec<Vec<f32>> = std::vec![Vec::new(); moments.len()];
+        let mut bayes = BayesMoments::new(source.classes());
+        let (mut logits, mut categories) = (Vec::new(), Vec::new());
+        let k = moments.len();
         source.for_each_row(|row| {
             if let Some((c, x)) = class_value(&row) {
                 if let (Some(m), Some(v)) = (moments.get_mut(c), values.get_mut(c)) {
                     m.push(x);
                     v.push(x as f32);
                 }
+            }
+            if let Some(c) = bayes::category(&row, k) {
+                bayes.push(&row);
+                categories.push(c);
+                logits.extend(row.logits.iter().map(|&x| x as f32));
             }
             Ok::<(), FitError>(())
         })?;
@@ -503,6 +620,42 @@ impl TrainingSet {
             path: source.path().to_path_buf(),
             moments,
             values,
+            bayes,
+            logits,
+            categories,
+        })
+    }
+
+    /// The Bayes head's counts with `bins` bins per logit (the same counts [`fit`]
+    /// makes).
+    ///
+    /// # Errors
+    ///
+    /// [`FitError::Param`] for a bin count out of `1..=65535`; [`FitError::Edges`] or
+    /// [`FitError::OutOfF32`] for a logit whose range a table cannot hold.
+    pub fn bayes_counts(&self, bins: usize) -> Result<BayesCounts, FitError> {
+        BayesParams { bins, lambda: 1.0 }.validate()?;
+        let mut counters = self.bayes.counters(bins)?;
+        let k = self.moments.len();
+        let no_id = None;
+        for (logits, &c) in self.logits.chunks_exact(k.max(1)).zip(&self.categories) {
+            let x: Vec<f64> = logits.iter().map(|&v| f64::from(v)).collect();
+            let row = Row {
+                index: 0,
+                line: None,
+                id: no_id,
+                label: if c < k {
+                    Label::Class(c)
+                } else {
+                    Label::Background
+                },
+                objectness: 1.0,
+                logits: &x,
+            };
+            counters.add(&row);
+        }
+        counters.finish().ok_or(FitError::Changed {
+            path: self.path.clone(),
         })
     }
 
@@ -569,7 +722,11 @@ impl TrainingSet {
         params.validate()?;
         let ml = self.histograms(params.bins_ml, params.edges)?;
         let map = self.histograms(params.bins_map, params.edges)?;
-        build_table(&self.moments, &ml, &map, params.settings())
+        let table = build_table(&self.moments, &ml, &map, params.settings())?;
+        match params.bayes {
+            Some(p) => with_bayes(table, &self.bayes_counts(p.bins)?, p.lambda),
+            None => Ok(table),
+        }
     }
 }
 

@@ -5,7 +5,7 @@
 //! heads always come from the layer itself (through [`DynTable`]), so the host reports
 //! exactly what the device computes.
 
-pub use crate::dyn_table::DynTable;
+pub use mlmap_core::{BayesSpec, DynTable};
 
 pub mod baselines;
 pub mod dataset;

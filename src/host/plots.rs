@@ -36,8 +36,8 @@ use self::draw::{class_color, method_color, Colour, LikelihoodPanel};
 use self::stats::{
     column, confidence_and_correct, ece, ece_label, pr_curve, reliability_bins, PrCurve, ScoreHist,
 };
-use crate::dyn_table::DynTable;
-use crate::histogram::Histogram;
+use crate::host::DynTable;
+use crate::Histogram;
 
 /// Bins of the score histograms of [`tp_fp_histograms`], on `[0, 1]`.
 pub const SCORE_BINS: usize = 20;
@@ -515,8 +515,7 @@ fn write_atomic(path: &Path, contents: &str) -> Result<(), PlotError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::histogram::{EdgeMode, UpperTail};
-    use crate::wire::{ClassSpec, Settings};
+    use crate::{ClassSpec, EdgeMode, Settings, UpperTail};
 
     fn tmp() -> tempfile::TempDir {
         tempfile::tempdir().unwrap()

@@ -82,6 +82,20 @@ pub struct FitArgs {
     /// Likelihood above the last edge.
     #[arg(long, value_enum, default_value_t = Tail::Zero)]
     pub upper_tail: Tail,
+    /// Bins per logit of the Bayes head.
+    #[arg(long, default_value_t = 22, value_name = "N")]
+    pub bins_bayes: usize,
+    /// Additive smoothing of the Bayes head (inside its logarithm), in (0, 1].
+    #[arg(
+        long,
+        default_value_t = 0.001,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
+    pub lambda_bayes: f32,
+    /// Leave the Bayes head out (a version-1 table that older builds read).
+    #[arg(long, conflicts_with_all = ["bins_bayes", "lambda_bayes"])]
+    pub no_bayes: bool,
     /// The table file to write.
     #[arg(long, short, value_name = "TABLE")]
     pub output: PathBuf,

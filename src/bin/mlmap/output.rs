@@ -1,5 +1,6 @@
 //! Writing outputs atomically, and printing to stdout without panicking.
 
+use std::fs;
 use std::io::{self, Write};
 use std::path::Path;
 
@@ -19,6 +20,61 @@ pub fn check_target(path: &Path) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// Files of an NPY directory input (docs/DESIGN.md §2) that an output could replace.
+const NPY_FILES: [&str; 4] = ["logits.npy", "labels.npy", "objectness.npy", "classes.txt"];
+
+/// Checks that `output` can be written ([`check_target`]) and names none of `inputs`,
+/// symbolic and hard links included: writing scores over the data they come from would
+/// destroy it. For an input that is an NPY directory, the output may not be one of its
+/// files either. Runs before anything is read.
+pub fn check_outputs(output: &Path, inputs: &[&Path]) -> Result<()> {
+    check_target(output)?;
+    let Ok(out_meta) = fs::metadata(output) else {
+        // Nothing there yet, so no input can be that file (an input must exist); but a
+        // new file inside an NPY input directory may still shadow nothing: allowed.
+        return Ok(());
+    };
+    for input in inputs {
+        let Ok(in_meta) = fs::metadata(input) else {
+            continue;
+        };
+        let clash = if in_meta.is_dir() {
+            // The output is one of the directory's data files.
+            let in_dir = output
+                .file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| NPY_FILES.contains(&n))
+                && fs::metadata(parent_dir(output)).is_ok_and(|d| same_file(&d, &in_meta));
+            in_dir
+        } else {
+            same_file(&out_meta, &in_meta)
+        };
+        if clash {
+            return Err(CliError::input(
+                output,
+                format!(
+                    "is the same file as the input {}; write the output elsewhere",
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Whether two metadata describe the same file (device and inode).
+#[cfg(unix)]
+fn same_file(a: &fs::Metadata, b: &fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    a.dev() == b.dev() && a.ino() == b.ino()
+}
+
+/// Whether two metadata describe the same file (no inode numbers here: never).
+#[cfg(not(unix))]
+fn same_file(_: &fs::Metadata, _: &fs::Metadata) -> bool {
+    false
 }
 
 /// The directory `path` is written into.
@@ -56,8 +112,20 @@ fn io_error(path: &Path, what: &str, e: &io::Error) -> CliError {
 /// Writes `path` through `fill`: into a temporary file in the same directory, renamed
 /// into place only when everything was written. On any error the temporary file is
 /// removed and `path` is untouched.
+///
+/// An existing `path` that is not a regular file (`/dev/null`, `/dev/stdout`, a FIFO) is
+/// written directly instead: renaming over it would replace the device with a file.
 pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>) -> Result<()> {
     check_target(path)?;
+    if fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        let file = fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| io_error(path, "cannot open", &e))?;
+        let mut w = io::BufWriter::new(file);
+        fill(&mut w)?;
+        return w.flush().map_err(|e| io_error(path, "cannot write", &e));
+    }
     let mut tmp = tempfile::Builder::new()
         .prefix(".mlmap-")
         .suffix(".tmp")

@@ -3,7 +3,7 @@
 use std::string::String;
 use std::vec::Vec;
 
-use crate::{EdgeMode, Histogram, VARIANCE_FLOOR};
+use crate::{Axis, EdgeMode, VARIANCE_FLOOR};
 
 use super::binpicker;
 
@@ -167,17 +167,9 @@ impl ClassHistogram {
 /// and bin rule ([`Histogram::bin`]), so that every training value is counted in the
 /// bin the device will look it up in.
 ///
-/// The edges are computed once, so counting a value costs an index estimate and two
-/// comparisons, with no conversion or branch per edge.
 #[derive(Debug, Clone)]
 pub(crate) struct BinCounter {
-    shape: Histogram<Vec<f32>>,
-    /// `e_0 ..= e_{B-1}` exactly as [`Histogram::edge`] gives them, then `+inf` in place
-    /// of `e_B`: for `x` in `[e_0, e_B]` the bin of `x` is the `k` with
-    /// `bounds[k] <= x < bounds[k + 1]` (the last bin closed on `e_B`, as numpy's).
-    bounds: Vec<f32>,
-    /// `B - 1` as `f32` (exact: `B <= 65535`).
-    last: f32,
+    shape: Axis,
     counts: Vec<u64>,
 }
 
@@ -185,42 +177,26 @@ impl BinCounter {
     /// A counter over `[lo, hi]` with `bins` bins, or `None` when those edges are not
     /// valid for a table (not finite, or inner edges not strictly increasing in `f32`).
     pub(crate) fn new(lo: f32, hi: f32, bins: usize) -> Option<Self> {
-        // Any valid frequency vector will do; only the edges matter here.
-        let mut provisional = std::vec![0.0f32; bins];
-        *provisional.first_mut()? = 1.0;
-        let shape = Histogram::new(lo, hi, provisional).ok()?;
-        let bounds = (0..bins)
-            .map(|k| shape.edge(k))
-            .chain([f32::INFINITY])
-            .collect();
         Some(Self {
-            shape,
-            bounds,
-            last: (bins - 1) as f32,
+            shape: Axis::new(lo, hi, bins).ok()?,
             counts: std::vec![0; bins],
         })
     }
 
+    /// Number of bins.
+    pub(crate) fn bins(&self) -> usize {
+        self.counts.len()
+    }
+
     /// Counts `x`; `false` when it is outside `[lo, hi]`.
     ///
-    /// The bin is the one [`Histogram::bin`] gives: the same index estimate, corrected
-    /// against the same edges until `e_k <= x < e_{k+1}` (`x <= e_B` in the last bin).
+    /// The bin is the one the layer looks `x` up in ([`Axis::bin`], the lookup of
+    /// [`Histogram::bin`](crate::Histogram::bin)).
     #[inline]
     pub(crate) fn add(&mut self, x: f32) -> bool {
-        let (lo, hi) = (self.shape.lo, self.shape.hi);
-        if !(x >= lo && x <= hi) {
+        let Some(k) = self.shape.bin(x) else {
             return false;
-        }
-        // `0 <= t`, and the estimate is at most `B - 1`: exact conversions.
-        let t = (x - lo) * self.shape.inv_width;
-        let mut k = t.min(self.last) as u32 as usize;
-        // `bounds[0] = e_0 <= x < bounds[B] = +inf`: both loops stop inside the slice.
-        while k > 0 && self.bounds.get(k).is_some_and(|&e| x < e) {
-            k -= 1;
-        }
-        while self.bounds.get(k + 1).is_some_and(|&e| x >= e) {
-            k += 1;
-        }
+        };
         match self.counts.get_mut(k) {
             Some(c) => {
                 *c += 1;

@@ -22,9 +22,7 @@ use plotters::style::{
 
 use super::stats::{CalBin, PrCurve, ScoreHist};
 use super::PlotError;
-use crate::gaussian::Gaussian;
-use crate::histogram::Histogram;
-use crate::math::Libm;
+use crate::{Gaussian, Histogram, Libm};
 
 /// A series colour.
 pub(super) type Colour = RGBColor;

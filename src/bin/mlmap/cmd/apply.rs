@@ -12,7 +12,7 @@ use crate::load;
 use crate::output;
 
 pub fn run(args: &ApplyArgs) -> Result<()> {
-    output::check_target(&args.output)?;
+    output::check_outputs(&args.output, &[&args.table, &args.input])?;
     let (table, _) = read_table(&args.table)?;
     let src = load::open(&args.input)?;
     load::check_classes(&args.input, src.classes(), table.class_names())?;

@@ -4,7 +4,7 @@
 //! 2. tune both lambdas on the validation set, keeping the firmware's shape 22 / 17;
 //! 3. evaluate sigmoid, softmax, temperature, ML and MAP on the test set and on the
 //!    never-seen objects;
-//! 4. decode the written table with the no_std layer (`Table<3, 22, 17>`) and check
+//! 4. decode the written table with the no_std layer (`Table<3, 22, 17, 22, 4>`) and check
 //!    that it scores every test row bit for bit like the host.
 
 use std::fmt::Write as _;
@@ -25,7 +25,7 @@ use crate::load::{self, Loaded};
 use crate::output;
 
 /// The shape the demo's firmware is built for.
-type Firmware = Table<3, 22, 17>;
+type Firmware = Table<3, 22, 17, 22, 4>;
 
 /// Scores every row with the decoded fixed-size table and with the host table;
 /// returns (rows compared, rows whose scores differ in any bit).
@@ -161,7 +161,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     let (n, differ) = device_check(&bytes, &tuned, &test, &test_p)?;
     let _ = writeln!(
         log,
-        "\n4. no_std layer: Table<3, 22, 17>::from_bytes({}) scored {n} test rows: {} with scores differing from the host's in any bit",
+        "\n4. no_std layer: Table<3, 22, 17, 22, 4>::from_bytes({}) scored {n} test rows: {} with scores differing from the host's in any bit",
         tuned_path.display(),
         differ
     );

@@ -83,12 +83,19 @@ pub fn run(args: &FitArgs) -> Result<()> {
         lambda_map: args.lambda_map,
         edges: super::edge_mode(args.edges),
         upper_tail: super::upper_tail(args.upper_tail),
+        bayes: (!args.no_bayes).then_some(fit::BayesParams {
+            bins: args.bins_bayes,
+            lambda: args.lambda_bayes,
+        }),
     };
     let train = &args.train;
     params.validate().map_err(|e| fit_error(train, e))?;
-    output::check_target(&args.output)?;
+    output::check_outputs(&args.output, &[train])?;
     let src = load::open(train)?;
     let table = fit::fit(&src, &params).map_err(|e| fit_error(train, e))?;
+    for w in fit::warnings(&table) {
+        eprintln!("mlmap: warning: {}: {w}", train.display());
+    }
     let size = write_table(&args.output, &table)?;
     output::print(&summary(&args.output, &table, size))
 }

@@ -128,6 +128,12 @@ pub fn search(
     };
     let table = build_table(train.moments(), &ml, &map, settings)
         .map_err(|e| fit_error(train.path(), e))?;
+    // The Bayes head with its fit defaults (not tuned yet).
+    let bayes = mlmap::host::fit::BayesParams::default();
+    let table = train
+        .bayes_counts(bayes.bins)
+        .and_then(|counts| mlmap::host::fit::with_bayes(table, &counts, bayes.lambda))
+        .map_err(|e| fit_error(train.path(), e))?;
     Ok((result, table))
 }
 
@@ -233,7 +239,7 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         tail: super::upper_tail(a.upper_tail),
         detail: a.top,
     };
-    output::check_target(&a.output)?;
+    output::check_outputs(&a.output, &[&a.train, &a.val])?;
     let train = TrainingSet::read(&load::open(&a.train)?).map_err(|e| fit_error(&a.train, e))?;
     let val = load::load(&a.val)?;
     let (result, table) = search(&train, &val, &a.val, &grid)?;

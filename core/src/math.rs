@@ -38,3 +38,15 @@ impl Backend for Libm {
 pub(crate) fn sqrt(x: f32) -> f32 {
     libm::sqrtf(x)
 }
+
+/// `e^x` for table preparation (decode time, never per detection).
+#[inline]
+pub(crate) fn exp(x: f32) -> f32 {
+    libm::expf(x)
+}
+
+/// Natural logarithm for table preparation (decode time, never per detection).
+#[inline]
+pub(crate) fn ln(x: f32) -> f32 {
+    libm::logf(x)
+}

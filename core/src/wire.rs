@@ -1,15 +1,23 @@
-//! The `.mlmap` wire format, version 1 (`docs/FORMAT.md` is the normative description).
+//! The `.mlmap` wire format, versions 1 and 2 (`docs/FORMAT.md` is the normative
+//! description).
 //!
 //! A table is one postcard message followed by a CRC-32:
 //!
 //! ```text
-//! Header   magic "MLMP" (4 raw bytes), version, K, ML bins, MAP bins (varint u16 each)
+//! Header   magic "MLMP" (4 raw bytes), version, K, ML bins, MAP bins (varint u16 each);
+//!          version 2 adds Bayes bins and Bayes categories (varint u16 each, both > 0)
 //! Settings edge mode (u8), upper tail (u8), lambda ML (f32 LE), lambda MAP (f32 LE)
 //! Classes  varint K, then per class: name (varint length + UTF-8), rows (varint u64),
 //!          mean, variance, ML lo, ML hi (f32 LE), ML frequencies (varint B + B f32 LE),
 //!          MAP lo, MAP hi (f32 LE), MAP frequencies (varint B + B f32 LE)
+//! Bayes    version 2 only: lambda (f32 LE), rows per category (varint C + C varint
+//!          u64), per logit its lo and hi (varint K + K pairs of f32 LE), the log-terms
+//!          (varint C*K*B + C*K*B f32 LE, category-major)
 //! CRC      CRC-32/ISO-HDLC (zlib's crc32) of every byte before it, 4 bytes LE
 //! ```
+//!
+//! A table without a Bayes head is written as version 1, a table with one as version 2:
+//! each table has exactly one encoding.
 //!
 //! This module is shared by the layer, the host table and `build.rs`; it depends on
 //! nothing but `core`, serde and postcard, and never allocates: the class sequence type
@@ -22,14 +30,19 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{DecodeError, EncodeError, Head, TableError};
 use crate::gaussian::{Gaussian, GaussianError};
-use crate::histogram::{EdgeMode, Histogram, HistogramError, UpperTail};
+use crate::histogram::{Axis, EdgeMode, Histogram, HistogramError, UpperTail};
 use crate::name::{ClassName, NAME_MAX};
+use crate::view::TableView;
 
 /// The four bytes every table starts with.
 pub const MAGIC: [u8; 4] = *b"MLMP";
 
-/// The format version this build writes and reads.
-pub const FORMAT_VERSION: u16 = 1;
+/// The newest format version: this build writes it for tables with a Bayes head, and
+/// reads it and every older version (a version-1 table has no Bayes head).
+pub const FORMAT_VERSION: u16 = 2;
+
+/// The version of tables without a Bayes head.
+const VERSION_1: u16 = 1;
 
 /// Largest smoothing lambda a table may hold. Frequencies are at most 1 and priors at
 /// most about `4e18`, so with `lambda <= 1e6` no sum of K terms can overflow `f32`.
@@ -61,6 +74,14 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// All zeros (invalid), for storage that is filled before use.
+    pub(crate) const ZERO: Self = Self {
+        lambda_ml: 0.0,
+        lambda_map: 0.0,
+        edge_mode: EdgeMode::Linspace,
+        upper_tail: UpperTail::Zero,
+    };
+
     /// Checks both lambdas.
     pub(crate) fn validate(&self) -> Result<(), TableError> {
         let ok = |l: f32| l > 0.0 && l <= MAX_LAMBDA;
@@ -154,32 +175,28 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> ClassSpec<'a, F, G> {
     }
 }
 
-/// Checks that no name repeats an earlier one (O(K^2), decode time only).
-pub(crate) fn check_unique_names(names: &[ClassName]) -> Result<(), TableError> {
-    for (i, n) in names.iter().enumerate() {
-        if names.iter().take(i).any(|m| m == n) {
-            return Err(TableError::DuplicateName {
-                class: u16::try_from(i).unwrap_or(u16::MAX),
-            });
-        }
-    }
-    Ok(())
-}
-
-/// The fixed part at the start of every table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+/// The fixed part at the start of every table, as read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Header {
-    pub(crate) magic: [u8; 4],
     pub(crate) version: u16,
     pub(crate) k: u16,
     pub(crate) bins_ml: u16,
     pub(crate) bins_map: u16,
+    /// 0 when the table has no Bayes head (version 1).
+    pub(crate) bins_bayes: u16,
+    /// 0 when the table has no Bayes head (version 1).
+    pub(crate) categories: u16,
 }
 
 impl Header {
     /// `(K, ML bins, MAP bins)`.
     pub(crate) fn shape(&self) -> (u16, u16, u16) {
         (self.k, self.bins_ml, self.bins_map)
+    }
+
+    /// `(Bayes bins, Bayes categories)`, `(0, 0)` without a Bayes head.
+    pub(crate) fn bayes_shape(&self) -> (u16, u16) {
+        (self.bins_bayes, self.categories)
     }
 }
 
@@ -245,8 +262,8 @@ pub(crate) struct ClassWire<'a, V, W> {
     map_freqs: W,
 }
 
-// Only the host's `DynTable` decodes through `ClassWire` (and `parse_body`).
-#[cfg_attr(not(feature = "std"), allow(dead_code))]
+// Only a test oracle decodes through `ClassWire` (and `parse_body`).
+#[cfg(test)]
 impl<'a, V, W> ClassWire<'a, V, W> {
     pub(crate) fn into_spec(self) -> ClassSpec<'a, V, W> {
         ClassSpec {
@@ -262,9 +279,10 @@ impl<'a, V, W> ClassWire<'a, V, W> {
     }
 }
 
-/// Everything after the header and before the CRC.
+/// Everything after the header and before the CRC of a version-1 table (a test oracle
+/// for [`parse_body_into`]).
+#[cfg(test)]
 #[derive(Deserialize)]
-#[cfg_attr(not(feature = "std"), allow(dead_code))]
 struct BodyWire<C> {
     settings: SettingsWire,
     classes: C,
@@ -287,18 +305,38 @@ pub(crate) fn open(bytes: &[u8]) -> Result<(Header, &[u8]), DecodeError> {
     if CRC_CHECK.checksum(payload) != u32::from_le_bytes(crc) {
         return Err(DecodeError::Corrupted);
     }
-    let (header, body) =
-        postcard::take_from_bytes::<Header>(payload).map_err(|_| DecodeError::Malformed)?;
-    if header.version != FORMAT_VERSION {
-        return Err(DecodeError::UnsupportedVersion {
-            found: header.version,
-        });
+    let malformed = |_| DecodeError::Malformed;
+    let ((_magic, version), rest) =
+        postcard::take_from_bytes::<([u8; 4], u16)>(payload).map_err(malformed)?;
+    if version != VERSION_1 && version != FORMAT_VERSION {
+        return Err(DecodeError::UnsupportedVersion { found: version });
+    }
+    let ((k, bins_ml, bins_map), mut body) =
+        postcard::take_from_bytes::<(u16, u16, u16)>(rest).map_err(malformed)?;
+    let mut header = Header {
+        version,
+        k,
+        bins_ml,
+        bins_map,
+        bins_bayes: 0,
+        categories: 0,
+    };
+    if version == FORMAT_VERSION {
+        let ((bins, categories), rest) =
+            postcard::take_from_bytes::<(u16, u16)>(body).map_err(malformed)?;
+        // Version 2 is only ever written for a table with a Bayes head.
+        if bins == 0 || categories == 0 {
+            return Err(DecodeError::Malformed);
+        }
+        (header.bins_bayes, header.categories, body) = (bins, categories, rest);
     }
     Ok((header, body))
 }
 
-/// Parses the body into settings and the class sequence `C`; every byte must be used.
-#[cfg_attr(not(feature = "std"), allow(dead_code))]
+/// Parses a version-1 body into settings and the class sequence `C` with serde's derived
+/// decoder; every byte must be used. Only a test oracle: tables decode through
+/// [`parse_body_into`].
+#[cfg(test)]
 pub(crate) fn parse_body<'a, C: Deserialize<'a>>(
     body: &'a [u8],
 ) -> Result<(Settings, C), DecodeError> {
@@ -320,6 +358,24 @@ pub(crate) trait BodySink<'a> {
     fn freqs(&mut self, class: usize, head: Head) -> &mut [f32];
     /// Every other field of class `class`, once its frequencies are stored.
     fn class(&mut self, class: usize, fields: ClassFields<'a>);
+    /// Where the Bayes head's sequences go (row counts, axes, log-terms); a longer
+    /// sequence is malformed. Only called for a table with a Bayes head.
+    fn bayes(&mut self) -> BayesSlots<'_>;
+}
+
+/// The storage a Bayes head is parsed into (axes get their `lo` and `hi` only).
+pub(crate) struct BayesSlots<'s> {
+    pub(crate) rows: &'s mut [u64],
+    pub(crate) axes: &'s mut [Axis],
+    pub(crate) terms: &'s mut [f32],
+}
+
+/// What a body held besides the classes' storage: the settings, the number of classes
+/// and, with a Bayes head, its lambda and the lengths of its three sequences.
+pub(crate) struct Parsed {
+    pub(crate) settings: Settings,
+    pub(crate) classes: usize,
+    pub(crate) bayes: Option<(f32, [usize; 3])>,
 }
 
 /// The fields of one class besides its frequencies, as parsed (not validated).
@@ -336,24 +392,88 @@ pub(crate) struct ClassFields<'a> {
     pub(crate) map_len: usize,
 }
 
-/// Parses the body into `sink`, with exactly the syntax [`parse_body`] accepts (a
-/// postcard `BodyWire`); every byte must be used. Returns the validated settings and
-/// the number of classes.
+/// Parses the body into `sink` (the one body parser: every table, fixed-size or not,
+/// decodes through it); every byte must be used. `bayes` says whether the header
+/// announced a Bayes section.
 pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     body: &'a [u8],
+    bayes: bool,
     sink: &mut S,
-) -> Result<(Settings, usize), DecodeError> {
+) -> Result<Parsed, DecodeError> {
+    let malformed = |_| DecodeError::Malformed;
     let mut de = postcard::Deserializer::from_bytes(body);
     // A struct is its fields in order: the settings, then the class sequence.
-    let settings = SettingsWire::deserialize(&mut de).map_err(|_| DecodeError::Malformed)?;
-    let count = ClassesSeed(sink)
+    let settings = SettingsWire::deserialize(&mut de).map_err(malformed)?;
+    let classes = ClassesSeed(&mut *sink)
         .deserialize(&mut de)
-        .map_err(|_| DecodeError::Malformed)?;
-    let rest = de.finalize().map_err(|_| DecodeError::Malformed)?;
+        .map_err(malformed)?;
+    let bayes = if bayes {
+        let lambda = f32::deserialize(&mut de).map_err(malformed)?;
+        let slots = sink.bayes();
+        let rows = seq_into(slots.rows, |slot: &mut u64, v: u64| *slot = v)
+            .deserialize(&mut de)
+            .map_err(malformed)?;
+        let axes = seq_into(slots.axes, |slot: &mut Axis, (lo, hi): (f32, f32)| {
+            (slot.lo, slot.hi) = (lo, hi);
+        })
+        .deserialize(&mut de)
+        .map_err(malformed)?;
+        let terms = seq_into(slots.terms, store)
+            .deserialize(&mut de)
+            .map_err(malformed)?;
+        Some((lambda, [rows, axes, terms]))
+    } else {
+        None
+    };
+    let rest = de.finalize().map_err(malformed)?;
     if !rest.is_empty() {
         return Err(DecodeError::Malformed);
     }
-    Ok((settings.to_settings()?, count))
+    Ok(Parsed {
+        settings: settings.to_settings()?,
+        classes,
+        bayes,
+    })
+}
+
+/// A sequence of `V`, stored through `set` into the slots of a slice; its value is the
+/// length of the sequence. A sequence longer than the slice is an error.
+struct SeqInto<'s, T, V, F>(&'s mut [T], F, core::marker::PhantomData<fn() -> V>);
+
+/// A [`SeqInto`] storing each parsed `V` into a slot of `slots` through `set`.
+fn seq_into<T, V, F: FnMut(&mut T, V)>(slots: &mut [T], set: F) -> SeqInto<'_, T, V, F> {
+    SeqInto(slots, set, core::marker::PhantomData)
+}
+
+impl<'de, T, V: Deserialize<'de>, F: FnMut(&mut T, V)> DeserializeSeed<'de>
+    for SeqInto<'_, T, V, F>
+{
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de, T, V: Deserialize<'de>, F: FnMut(&mut T, V)> Visitor<'de> for SeqInto<'_, T, V, F> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let SeqInto(slots, mut set, _) = self;
+        let mut n = 0;
+        while let Some(v) = seq.next_element::<V>()? {
+            match slots.get_mut(n) {
+                Some(slot) => set(slot, v),
+                None => return Err(A::Error::invalid_length(n + 1, &"a shorter sequence")),
+            }
+            n += 1;
+        }
+        Ok(n)
+    }
 }
 
 /// The class sequence, into a [`BodySink`]; its value is the number of classes.
@@ -436,11 +556,11 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for ClassSeed<'_, S> {
         let (mean, variance) = (next(&mut seq)?, next(&mut seq)?);
         let ml_range = (next(&mut seq)?, next(&mut seq)?);
         let ml_len = seq
-            .next_element_seed(FreqsSeed(self.sink.freqs(self.class, Head::Ml)))?
+            .next_element_seed(seq_into(self.sink.freqs(self.class, Head::Ml), store))?
             .ok_or_else(|| A::Error::invalid_length(6, &"a class"))?;
         let map_range = (next(&mut seq)?, next(&mut seq)?);
         let map_len = seq
-            .next_element_seed(FreqsSeed(self.sink.freqs(self.class, Head::Map)))?
+            .next_element_seed(seq_into(self.sink.freqs(self.class, Head::Map), store))?
             .ok_or_else(|| A::Error::invalid_length(9, &"a class"))?;
         self.sink.class(
             self.class,
@@ -459,35 +579,9 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for ClassSeed<'_, S> {
     }
 }
 
-/// A frequency sequence, into a slice; its value is the number of frequencies.
-struct FreqsSeed<'s>(&'s mut [f32]);
-
-impl<'de> DeserializeSeed<'de> for FreqsSeed<'_> {
-    type Value = usize;
-
-    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
-        d.deserialize_seq(self)
-    }
-}
-
-impl<'de> Visitor<'de> for FreqsSeed<'_> {
-    type Value = usize;
-
-    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("a sequence of frequencies")
-    }
-
-    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
-        let mut n = 0;
-        while let Some(v) = seq.next_element::<f32>()? {
-            match self.0.get_mut(n) {
-                Some(slot) => *slot = v,
-                None => return Err(A::Error::invalid_length(n + 1, &self)),
-            }
-            n += 1;
-        }
-        Ok(n)
-    }
+/// Stores one parsed `f32`.
+fn store(slot: &mut f32, v: f32) {
+    *slot = v;
 }
 
 /// Serialises the classes `0..k` produced by `class` as one postcard sequence.
@@ -511,38 +605,37 @@ where
     }
 }
 
-#[derive(Serialize)]
-struct MessageRef<C> {
-    header: Header,
-    settings: SettingsWire,
-    classes: C,
-}
+/// The message [`encode`] writes before the CRC, for the table `view`: a version-1
+/// message without a Bayes head, a version-2 message with one. Postcard writes a tuple
+/// as its elements in order, with no length.
+struct Message<'v, 'a, F, G>(&'v TableView<'a, F, G>);
 
-/// One class on the wire, borrowed from a validated table.
-type ClassView<'a> = ClassWire<'a, &'a [f32], &'a [f32]>;
-
-/// The message [`encode`] writes, before the CRC.
-fn message<'a, F>(
-    shape: (u16, u16, u16),
-    settings: &Settings,
-    class: F,
-) -> MessageRef<ClassSeq<impl Fn(usize) -> Option<ClassView<'a>>>>
-where
-    F: Fn(usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>>,
-{
-    MessageRef {
-        header: Header {
-            magic: MAGIC,
-            version: FORMAT_VERSION,
-            k: shape.0,
-            bins_ml: shape.1,
-            bins_map: shape.2,
-        },
-        settings: SettingsWire::from_settings(settings),
-        classes: ClassSeq {
-            k: usize::from(shape.0),
-            class: move |i| {
-                let c = class(i)?;
+impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeTuple;
+        let view = self.0;
+        let narrow = |n: usize| u16::try_from(n).unwrap_or(u16::MAX);
+        let k = view.k();
+        let mut t = s.serialize_tuple(13)?;
+        t.serialize_element(&MAGIC)?;
+        let bayes = view.bayes();
+        t.serialize_element(&if bayes.is_some() {
+            FORMAT_VERSION
+        } else {
+            VERSION_1
+        })?;
+        t.serialize_element(&narrow(k))?;
+        t.serialize_element(&narrow(view.bins_ml()))?;
+        t.serialize_element(&narrow(view.bins_map()))?;
+        if let Some(b) = &bayes {
+            t.serialize_element(&narrow(b.bins()))?;
+            t.serialize_element(&narrow(b.categories()))?;
+        }
+        t.serialize_element(&SettingsWire::from_settings(view.settings()))?;
+        t.serialize_element(&ClassSeq {
+            k,
+            class: |i| {
+                let c = view.spec(i)?;
                 Some(ClassWire {
                     name: c.name,
                     rows: c.rows,
@@ -556,42 +649,60 @@ where
                     map_freqs: c.map_freqs,
                 })
             },
-        },
+        })?;
+        if let Some(b) = &bayes {
+            t.serialize_element(&b.lambda())?;
+            t.serialize_element(b.all_rows())?;
+            t.serialize_element(&AxesSeq(b.axes()))?;
+            t.serialize_element(b.all_terms())?;
+        }
+        t.end()
     }
 }
 
-/// Encodes a validated table given by its shape, settings and a per-class view.
-pub(crate) fn encode<'a, 'b, F>(
-    shape: (u16, u16, u16),
-    settings: &Settings,
-    class: F,
+/// The axes of a Bayes head on the wire: a sequence of `(lo, hi)` pairs.
+struct AxesSeq<'a>(&'a [Axis]);
+
+impl Serialize for AxesSeq<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let mut seq = s.serialize_seq(Some(self.0.len()))?;
+        for a in self.0 {
+            seq.serialize_element(&(a.lo, a.hi))?;
+        }
+        seq.end()
+    }
+}
+
+/// Encodes a validated table.
+pub(crate) fn encode<'b, F: AsRef<[f32]>, G: AsRef<[f32]>>(
+    view: &TableView<'_, F, G>,
     buf: &'b mut [u8],
-) -> Result<&'b mut [u8], EncodeError>
-where
-    F: Fn(usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>>,
-{
-    let msg = message(shape, settings, class);
-    postcard::to_slice_crc32(&msg, buf, CRC.digest()).map_err(|_| EncodeError::BufferTooSmall)
+) -> Result<&'b mut [u8], EncodeError> {
+    postcard::to_slice_crc32(&Message(view), buf, CRC.digest())
+        .map_err(|_| EncodeError::BufferTooSmall)
+}
+
+/// Number of bytes [`encode`] writes for `view`, CRC included.
+pub(crate) fn encoded_len<F: AsRef<[f32]>, G: AsRef<[f32]>>(
+    view: &TableView<'_, F, G>,
+) -> Option<usize> {
+    postcard::serialize_with_flavor(&Message(view), postcard::ser_flavors::Size::default())
+        .ok()?
+        .checked_add(CRC_LEN)
 }
 
 /// Checks that a decoded table came from exactly the bytes [`encode`] writes for it:
 /// postcard reads a varint written in more bytes than needed (`0x84 0x00` for 4), and
 /// such a non-canonical input would decode to a table whose encoding differs. Only the
 /// lengths need comparing: every other field has a fixed size and decodes losslessly,
-/// and an overlong varint only ever adds bytes. Measures, writes nothing.
-pub(crate) fn check_canonical<'a, F>(
+/// an overlong varint only ever adds bytes, and the version is fixed by whether the
+/// table has a Bayes head, which the header announced. Measures, writes nothing.
+pub(crate) fn check_canonical<F: AsRef<[f32]>, G: AsRef<[f32]>>(
     len: usize,
-    shape: (u16, u16, u16),
-    settings: &Settings,
-    class: F,
-) -> Result<(), DecodeError>
-where
-    F: Fn(usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>>,
-{
-    let msg = message(shape, settings, class);
-    let size = postcard::serialize_with_flavor(&msg, postcard::ser_flavors::Size::default())
-        .map_err(|_| DecodeError::Malformed)?;
-    if size.checked_add(CRC_LEN) != Some(len) {
+    view: &TableView<'_, F, G>,
+) -> Result<(), DecodeError> {
+    if encoded_len(view) != Some(len) {
         return Err(DecodeError::Malformed);
     }
     Ok(())
@@ -611,9 +722,26 @@ const fn varint_len(n: usize) -> usize {
 /// Shortest possible table: magic, one-byte version and shape, settings, K = 0, CRC.
 const MIN_ENCODED_LEN: usize = MAGIC.len() + 4 + 10 + 1 + CRC_LEN;
 
-/// Upper bound of the encoded size of a table with `k` classes and the given bin counts
-/// (every name [`NAME_MAX`] bytes, every row count the largest `u64`).
-pub const fn max_encoded_len(k: usize, bins_ml: usize, bins_map: usize) -> usize {
+/// Upper bound of the encoded size of a table with `k` classes, the given bin counts and
+/// `categories` Bayes categories (0 and 0 without a Bayes head); every name
+/// [`NAME_MAX`] bytes, every row count the largest `u64`.
+pub(crate) const fn max_encoded_len(
+    k: usize,
+    bins_ml: usize,
+    bins_map: usize,
+    bins_bayes: usize,
+    categories: usize,
+) -> usize {
+    let bayes = if bins_bayes == 0 {
+        0
+    } else {
+        let terms = categories * k * bins_bayes;
+        2 * varint_len(u16::MAX as usize) // Bayes shape in the header
+            + 4 // lambda
+            + varint_len(categories) + 10 * categories
+            + varint_len(k) + 8 * k
+            + varint_len(terms) + 4 * terms
+    };
     let header = MAGIC.len() + 4 * varint_len(u16::MAX as usize);
     let settings = 2 + 4 + 4;
     let per_class = varint_len(NAME_MAX) + NAME_MAX
@@ -621,7 +749,7 @@ pub const fn max_encoded_len(k: usize, bins_ml: usize, bins_map: usize) -> usize
         + 4 * 2 // mean, variance
         + 4 * 2 + varint_len(bins_ml) + 4 * bins_ml
         + 4 * 2 + varint_len(bins_map) + 4 * bins_map;
-    header + settings + varint_len(k) + k * per_class + CRC_LEN
+    header + settings + varint_len(k) + k * per_class + bayes + CRC_LEN
 }
 
 #[cfg(test)]
@@ -632,7 +760,7 @@ mod tests {
     /// The shipped table with the first class's row count rewritten as an overlong
     /// varint (one byte more than needed) and the CRC recomputed.
     fn overlong_rows() -> Vec<u8> {
-        let bytes = include_bytes!("../tables/default.mlmap");
+        let bytes = include_bytes!("../../tests/golden/train_linspace.mlmap");
         // magic, version/K/bins (one byte each), settings, K, name length, "car", rows.
         let rows_at = 4 + 4 + 10 + 1 + 1 + 3;
         assert_eq!(&bytes[rows_at - 3..rows_at], b"car");
@@ -650,7 +778,7 @@ mod tests {
     /// decoded to a table whose own encoding is different (two files for one table).
     #[test]
     fn non_canonical_varint_is_rejected() {
-        let bytes = include_bytes!("../tables/default.mlmap");
+        let bytes = include_bytes!("../../tests/golden/train_linspace.mlmap");
         let table = crate::Table::<3, 22, 17>::from_bytes(bytes).unwrap();
         let mut buf = [0u8; crate::Table::<3, 22, 17>::MAX_ENCODED_LEN];
         assert_eq!(table.to_slice(&mut buf).unwrap(), &bytes[..]);
@@ -660,9 +788,9 @@ mod tests {
             crate::Table::<3, 22, 17>::from_bytes(&overlong),
             Err(DecodeError::Malformed)
         );
-        #[cfg(feature = "std")]
+        #[cfg(feature = "alloc")]
         assert_eq!(
-            crate::host::DynTable::from_bytes(&overlong),
+            crate::DynTable::from_bytes(&overlong),
             Err(DecodeError::Malformed)
         );
     }

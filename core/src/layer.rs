@@ -41,6 +41,7 @@ impl<const K: usize> Scores<K> {
     /// # Examples
     ///
     /// ```
+    /// # use mlmap_core as mlmap;
     /// let s = mlmap::Scores([0.2, 0.4, 0.4]);
     /// assert_eq!(s.argmax(), 1);
     /// ```
@@ -60,6 +61,7 @@ impl<const K: usize> Scores<K> {
     /// # Examples
     ///
     /// ```
+    /// # use mlmap_core as mlmap;
     /// let s = mlmap::Scores([0.3, 0.3, 0.3]);
     /// assert_eq!(s.argmax(), 0);
     /// assert_eq!(s.decide(&[-1.0, 2.5, 0.4]), 1);
@@ -116,6 +118,7 @@ pub fn argmax(values: &[f32]) -> usize {
 /// # Examples
 ///
 /// ```
+/// # use mlmap_core as mlmap;
 /// // Scores in f64 (host), logits as read from the data.
 /// assert_eq!(mlmap::decide(&[0.25f64, 0.5, 0.5], &[9.0f64, 1.0, 2.0]), 2);
 /// assert_eq!(mlmap::decide(&[0.25f64, 0.5, 0.5], &[9.0f64, 2.0, 2.0]), 1);

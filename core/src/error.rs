@@ -13,6 +13,8 @@ pub enum Head {
     Ml,
     /// The maximum a-posteriori head (histogram likelihood times Gaussian prior).
     Map,
+    /// The Bayes head (a posterior over every logit, docs/DESIGN.md §1.6).
+    Bayes,
 }
 
 impl fmt::Display for Head {
@@ -20,6 +22,7 @@ impl fmt::Display for Head {
         f.write_str(match self {
             Self::Ml => "ML",
             Self::Map => "MAP",
+            Self::Bayes => "Bayes",
         })
     }
 }
@@ -83,6 +86,14 @@ pub enum TableError {
     },
     /// The number of classes is below 2 or above `u16::MAX`.
     ClassCount,
+    /// A category of the Bayes head has no training rows, or the rows overflow `u64`.
+    CategoryRows {
+        /// Category index (K is `background`).
+        class: u16,
+    },
+    /// The Bayes head's shape is inconsistent: categories other than K or K + 1, or
+    /// a stored sequence of the wrong length.
+    BayesShape,
 }
 
 impl fmt::Display for TableError {
@@ -119,6 +130,13 @@ impl fmt::Display for TableError {
                 write!(f, "name of class {class} repeats an earlier class name")
             }
             Self::ClassCount => f.write_str("a table needs between 2 and 65535 classes"),
+            Self::CategoryRows { class } => write!(
+                f,
+                "Bayes category {class} has no training rows (or the row counts overflow)"
+            ),
+            Self::BayesShape => f.write_str(
+                "Bayes head: categories are not K or K + 1, or a sequence has the wrong length"
+            ),
         }
     }
 }
@@ -147,6 +165,14 @@ pub enum DecodeError {
         /// `(K, ML bins, MAP bins)` stored in the table.
         found: (u16, u16, u16),
     },
+    /// The table has another Bayes head shape than the type it is decoded into (one
+    /// has a Bayes head and the other not, or the bins or categories differ).
+    BayesShapeMismatch {
+        /// `(Bayes bins, categories)` of the destination type, `(0, 0)` for none.
+        expected: (u16, u16),
+        /// `(Bayes bins, categories)` stored in the table, `(0, 0)` for none.
+        found: (u16, u16),
+    },
     /// The checksum matched, but the body does not follow the format (a field is
     /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over, a
     /// varint is not in its shortest form).
@@ -170,6 +196,11 @@ impl fmt::Display for DecodeError {
                 f,
                 "table has {} classes, {} ML bins and {} MAP bins; expected {}, {} and {}",
                 found.0, found.1, found.2, expected.0, expected.1, expected.2
+            ),
+            Self::BayesShapeMismatch { expected, found } => write!(
+                f,
+                "table has a Bayes head of {} bins and {} categories; expected {} and {} (0 and 0: none)",
+                found.0, found.1, expected.0, expected.1
             ),
             Self::Malformed => f.write_str("table body does not follow the mlmap format"),
             Self::Invalid(e) => write!(f, "invalid table: {e}"),
@@ -225,6 +256,9 @@ pub enum InferError {
     Length,
     /// Evidence or lambda given to `scores_from_evidence` is out of range.
     Evidence,
+    /// The Bayes head was asked for, and the table has none (it was fitted with
+    /// `--no-bayes`, or is a version-1 table).
+    NoBayesHead,
 }
 
 impl fmt::Display for InferError {
@@ -236,6 +270,7 @@ impl fmt::Display for InferError {
             Self::Evidence => {
                 f.write_str("evidence is not finite and >= 0, or lambda is out of range")
             }
+            Self::NoBayesHead => f.write_str("the table has no Bayes head"),
         }
     }
 }

@@ -13,12 +13,19 @@ pub struct ClassName {
 }
 
 impl ClassName {
+    /// The empty name (invalid), for storage that is filled before use.
+    pub(crate) const EMPTY: Self = Self {
+        len: 0,
+        bytes: [0; NAME_MAX],
+    };
+
     /// Stores `name`; `None` if it is empty, longer than [`NAME_MAX`] bytes, or the
     /// reserved label `background`.
     ///
     /// # Examples
     ///
     /// ```
+    /// # use mlmap_core as mlmap;
     /// use mlmap::ClassName;
     /// assert_eq!(ClassName::new("cyclist").unwrap().as_str(), "cyclist");
     /// assert!(ClassName::new("").is_none());

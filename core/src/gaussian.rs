@@ -32,6 +32,14 @@ pub struct Gaussian {
 }
 
 impl Gaussian {
+    /// All zeros (invalid), for storage that is filled before use.
+    pub(crate) const ZERO: Self = Self {
+        mean: 0.0,
+        var: 0.0,
+        neg_half_inv_var: 0.0,
+        norm: 0.0,
+    };
+
     /// Validates and builds a prior.
     ///
     /// # Errors

@@ -82,21 +82,7 @@ impl<F: AsRef<[f32]>> Histogram<F> {
     ///
     /// Never.
     pub fn new(lo: f32, hi: f32, freqs: F) -> Result<Self, HistogramError> {
-        let n = freqs.as_ref().len();
-        if n == 0 || n > usize::from(u16::MAX) {
-            return Err(HistogramError::Edges);
-        }
-        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-            return Err(HistogramError::Edges);
-        }
-        let span = hi - lo;
-        let bins = n as f32;
-        let width = span / bins;
-        let inv_width = bins / span;
-        let finite_positive = |v: f32| v.is_finite() && v > 0.0;
-        if !(finite_positive(span) && finite_positive(width) && finite_positive(inv_width)) {
-            return Err(HistogramError::Edges);
-        }
+        let (width, inv_width) = equal_bins(lo, hi, freqs.as_ref().len())?;
         let h = Self {
             lo,
             hi,
@@ -104,14 +90,6 @@ impl<F: AsRef<[f32]>> Histogram<F> {
             inv_width,
             freqs,
         };
-        let mut prev = lo;
-        for k in 1..=n {
-            let e = h.edge(k);
-            if !(e > prev) {
-                return Err(HistogramError::Edges);
-            }
-            prev = e;
-        }
         let mut sum = 0.0f32;
         for &f in h.freqs.as_ref() {
             if !(f.is_finite() && f >= 0.0) {
@@ -161,12 +139,9 @@ impl<F: AsRef<[f32]>> Histogram<F> {
         }
     }
 
-    /// `lo + k * w`: edge `e_k` for `0 < k < B`, and a value equal to `e_0` for `k = 0`
-    /// (`0 * w` is 0, and `lo + 0` compares equal to `lo`). `k < B <= u16::MAX`, so the
-    /// conversion through `u32` is exact and cheaper than one from `usize`.
     #[inline(always)]
     fn inner_edge(&self, k: usize) -> f32 {
-        self.lo + (k as u32 as f32) * self.width
+        inner_edge(self.lo, self.width, k)
     }
 
     /// The bin containing `x` under numpy's rule, or `None` outside `[e_0, e_B]`
@@ -186,35 +161,7 @@ impl<F: AsRef<[f32]>> Histogram<F> {
     /// The bin of `x`, for `lo <= x <= hi`.
     #[inline(always)]
     fn bin_in_support(&self, x: f32) -> usize {
-        /// `1.5 * 2^23`: sums with it in `[2^23, 2^24)` are rounded to integers.
-        const ROUNDER: f32 = 12_582_912.0;
-        let last = self.bins() - 1;
-        // Estimate `floor(t)`, then correct against the true edges. The estimate is off
-        // by at most one bin for validated tables; the corrections make the result exact
-        // regardless. `0 <= t <= B (1 + eps)`, far below 2^22, so `t - 0.5 + ROUNDER`
-        // is an integer-valued f32 equal to `ROUNDER + round(t - 0.5)`: `kf` is the
-        // estimate as an exact f32 and `k` as an integer, without float-int conversions.
-        let t = (x - self.lo) * self.inv_width;
-        let r = t - 0.5 + ROUNDER;
-        let cap = ROUNDER + last as u32 as f32;
-        let r = if r < cap { r } else { cap };
-        let kf = r - ROUNDER;
-        let mut k = r.to_bits().saturating_sub(ROUNDER.to_bits()) as usize;
-        // `kf` is `k as f32` and `lo + kf * w` is `edge(k)` for 1 <= k <= last (and
-        // compares equal to it for k = 0). After a step down `x < e_(k+1)` holds, so at
-        // most one direction ever moves.
-        if x < self.lo + kf * self.width {
-            k = k.saturating_sub(1);
-            while k > 0 && x < self.inner_edge(k) {
-                k -= 1;
-            }
-        } else if k < last && x >= self.lo + (kf + 1.0) * self.width {
-            k += 1;
-            while k < last && x >= self.inner_edge(k + 1) {
-                k += 1;
-            }
-        }
-        k
+        locate(self.lo, self.width, self.inv_width, self.bins() - 1, x)
     }
 
     /// The likelihood `L` of `x`: the frequency of its bin, 0 outside the support, with
@@ -233,6 +180,174 @@ impl<F: AsRef<[f32]>> Histogram<F> {
             return 0.0;
         };
         self.freqs.as_ref().get(k).copied().unwrap_or(0.0)
+    }
+}
+
+/// Width and reciprocal width of `n` equal bins over `[lo, hi]`, after checking that
+/// the edges are finite and that every inner edge `lo + k * w` is strictly above the
+/// previous one in `f32`.
+fn equal_bins(lo: f32, hi: f32, n: usize) -> Result<(f32, f32), HistogramError> {
+    if n == 0 || n > usize::from(u16::MAX) {
+        return Err(HistogramError::Edges);
+    }
+    if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+        return Err(HistogramError::Edges);
+    }
+    let span = hi - lo;
+    let bins = n as f32;
+    let width = span / bins;
+    let inv_width = bins / span;
+    let finite_positive = |v: f32| v.is_finite() && v > 0.0;
+    if !(finite_positive(span) && finite_positive(width) && finite_positive(inv_width)) {
+        return Err(HistogramError::Edges);
+    }
+    let mut prev = lo;
+    for k in 1..n {
+        let e = inner_edge(lo, width, k);
+        if !(e > prev) {
+            return Err(HistogramError::Edges);
+        }
+        prev = e;
+    }
+    if !(hi > prev) {
+        return Err(HistogramError::Edges);
+    }
+    Ok((width, inv_width))
+}
+
+/// `lo + k * w`: edge `e_k` for `0 < k < B` (one rounded product, one rounded sum).
+/// `k < B <= u16::MAX`, so the conversion through `u32` is exact and cheaper than one
+/// from `usize`.
+#[inline(always)]
+fn inner_edge(lo: f32, width: f32, k: usize) -> f32 {
+    lo + (k as u32 as f32) * width
+}
+
+/// The bin of `x` among `last + 1` equal-width bins starting at `lo`, for `x` inside
+/// the support (`lo <= x <= e_B`): the O(1) lookup of the module docs, shared by
+/// [`Histogram`] and [`Axis`].
+#[inline(always)]
+fn locate(lo: f32, width: f32, inv_width: f32, last: usize, x: f32) -> usize {
+    /// `1.5 * 2^23`: sums with it in `[2^23, 2^24)` are rounded to integers.
+    const ROUNDER: f32 = 12_582_912.0;
+    // Estimate `floor(t)`, then correct against the true edges. The estimate is off
+    // by at most one bin for validated tables; the corrections make the result exact
+    // regardless. `0 <= t <= B (1 + eps)`, far below 2^22, so `t - 0.5 + ROUNDER`
+    // is an integer-valued f32 equal to `ROUNDER + round(t - 0.5)`: `kf` is the
+    // estimate as an exact f32 and `k` as an integer, without float-int conversions.
+    let t = (x - lo) * inv_width;
+    let r = t - 0.5 + ROUNDER;
+    let cap = ROUNDER + last as u32 as f32;
+    let r = if r < cap { r } else { cap };
+    let kf = r - ROUNDER;
+    let mut k = r.to_bits().saturating_sub(ROUNDER.to_bits()) as usize;
+    // `kf` is `k as f32` and `lo + kf * w` is `edge(k)` for 1 <= k <= last (and
+    // compares equal to it for k = 0). After a step down `x < e_(k+1)` holds, so at
+    // most one direction ever moves.
+    if x < lo + kf * width {
+        k = k.saturating_sub(1);
+        while k > 0 && x < inner_edge(lo, width, k) {
+            k -= 1;
+        }
+    } else if k < last && x >= lo + (kf + 1.0) * width {
+        k += 1;
+        while k < last && x >= inner_edge(lo, width, k + 1) {
+            k += 1;
+        }
+    }
+    k
+}
+
+/// The equal-width bins of one logit, without frequencies: the support of a Bayes head's
+/// per-logit histograms ([`crate::BayesView`]), with the same edges and the same lookup
+/// rule as a [`Histogram`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Axis {
+    pub(crate) lo: f32,
+    pub(crate) hi: f32,
+    pub(crate) width: f32,
+    pub(crate) inv_width: f32,
+    pub(crate) bins: u16,
+}
+
+impl Axis {
+    /// An axis of all zeros (invalid), for storage that is filled before use.
+    pub(crate) const ZERO: Self = Self {
+        lo: 0.0,
+        hi: 0.0,
+        width: 0.0,
+        inv_width: 0.0,
+        bins: 0,
+    };
+
+    /// Validates and builds `bins` equal bins over `[lo, hi]`.
+    ///
+    /// # Errors
+    ///
+    /// [`HistogramError::Edges`] as for [`Histogram::new`].
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    pub fn new(lo: f32, hi: f32, bins: usize) -> Result<Self, HistogramError> {
+        let (width, inv_width) = equal_bins(lo, hi, bins)?;
+        Ok(Self {
+            lo,
+            hi,
+            width,
+            inv_width,
+            bins: u16::try_from(bins).map_err(|_| HistogramError::Edges)?,
+        })
+    }
+
+    /// The first edge `e_0`.
+    #[inline]
+    pub fn lo(&self) -> f32 {
+        self.lo
+    }
+
+    /// The last edge `e_B`.
+    #[inline]
+    pub fn hi(&self) -> f32 {
+        self.hi
+    }
+
+    /// Number of bins `B`.
+    #[inline]
+    pub fn bins(&self) -> usize {
+        usize::from(self.bins)
+    }
+
+    /// Edge `e_k`, exactly as [`Histogram::edge`] computes it; `k >= B` gives `e_B`.
+    #[inline]
+    pub fn edge(&self, k: usize) -> f32 {
+        if k == 0 {
+            self.lo
+        } else if k >= self.bins() {
+            self.hi
+        } else {
+            inner_edge(self.lo, self.width, k)
+        }
+    }
+
+    /// The bin containing `x` under numpy's rule, or `None` outside `[e_0, e_B]`
+    /// (`±inf` and NaN included).
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    #[inline]
+    pub fn bin(&self, x: f32) -> Option<usize> {
+        if !(x >= self.lo && x <= self.hi) || self.bins == 0 {
+            return None;
+        }
+        Some(locate(
+            self.lo,
+            self.width,
+            self.inv_width,
+            usize::from(self.bins) - 1,
+            x,
+        ))
     }
 }
 

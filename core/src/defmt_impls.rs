@@ -13,6 +13,7 @@ impl Format for Head {
         match self {
             Self::Ml => write!(f, "ML"),
             Self::Map => write!(f, "MAP"),
+            Self::Bayes => write!(f, "Bayes"),
         }
     }
 }
@@ -35,6 +36,8 @@ impl Format for TableError {
             Self::Name { class } => write!(f, "name of class {} invalid", class),
             Self::DuplicateName { class } => write!(f, "name of class {} repeated", class),
             Self::ClassCount => write!(f, "class count out of range"),
+            Self::CategoryRows { class } => write!(f, "Bayes category {} has no rows", class),
+            Self::BayesShape => write!(f, "Bayes head shape inconsistent"),
         }
     }
 }
@@ -48,6 +51,13 @@ impl Format for DecodeError {
             Self::UnsupportedVersion { found } => write!(f, "UnsupportedVersion({})", found),
             Self::ShapeMismatch { expected, found } => {
                 write!(f, "ShapeMismatch(expected {}, found {})", expected, found)
+            }
+            Self::BayesShapeMismatch { expected, found } => {
+                write!(
+                    f,
+                    "BayesShapeMismatch(expected {}, found {})",
+                    expected, found
+                )
             }
             Self::Malformed => write!(f, "Malformed"),
             Self::Invalid(e) => write!(f, "Invalid({})", e),
@@ -68,6 +78,7 @@ impl Format for InferError {
             Self::Objectness => write!(f, "Objectness"),
             Self::Length => write!(f, "Length"),
             Self::Evidence => write!(f, "Evidence"),
+            Self::NoBayesHead => write!(f, "NoBayesHead"),
         }
     }
 }
@@ -139,14 +150,23 @@ impl<const K: usize> Format for Scores<K> {
     }
 }
 
-impl<const K: usize, const B_ML: usize, const B_MAP: usize> Format for Table<K, B_ML, B_MAP> {
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+    > Format for Table<K, B_ML, B_MAP, B_BAYES, C>
+{
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
-            "Table<{}, {}, {}> {{ classes: {=[?]}, {} }}",
+            "Table<{}, {}, {}, {}, {}> {{ classes: {=[?]}, {} }}",
             K,
             B_ML,
             B_MAP,
+            B_BAYES,
+            C,
             &self.names[..],
             self.settings
         )

@@ -1,0 +1,248 @@
+//! The Bayes head (docs/DESIGN.md §1.6): a naive-Bayes posterior over every logit of
+//! the detection, with a `background` category when the training data has one.
+//!
+//! Categories `c` are the K classes, plus `background` (index K) when the table was
+//! fitted from data with background rows. Logit `j` has one set of equal-width bins
+//! (an [`Axis`]) over all training rows; category `c` has a histogram of logit `j` over
+//! its own rows, with frequencies `h[c][j][b]`. The table stores, per category, logit
+//! and bin, the log-term `t[c][j][b] = ln(h[c][j][b] + lambda)` in `f32`, and per
+//! category its number of training rows, from which the prior `ln pi[c]` is computed
+//! once, at decode. For a detection with logits `x`:
+//!
+//! ```text
+//! l[c] = ln pi[c] + sum_j t[c][j][bin_j(x_j)]      (ln(lambda) when x_j is outside axis j)
+//! p[c] = exp(l[c] - max l) / sum_c' exp(l[c'] - max l)
+//! s_i  = OS * p[i]                                   for the K classes only
+//! ```
+//!
+//! So inference is `K * |C|` lookups and additions and one softmax over `|C|` values.
+//! The background share is not a class score: the K scores sum to `OS` without a
+//! background category and to at most `OS` with one. A detection whose every logit is
+//! outside its axis gets the same log-term sum in every category, so its scores are
+//! `OS * pi[i]`.
+//!
+//! Storage is borrowed ([`BayesView`]): the fixed-size [`Table`](crate::Table) and the
+//! host's [`DynTable`](crate::DynTable) hold their arrays and lend them here, so both
+//! run this one implementation.
+
+use crate::error::{Head, InferError, TableError};
+use crate::histogram::{Axis, FREQUENCY_SUM_TOLERANCE};
+use crate::math::{self, Backend};
+
+/// The Bayes head of a table, borrowed from its storage.
+///
+/// `terms` is laid out category-major: the `B` log-terms of category `c` and logit `j`
+/// start at `(c * K + j) * B`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BayesView<'a> {
+    pub(crate) axes: &'a [Axis],
+    pub(crate) terms: &'a [f32],
+    pub(crate) rows: &'a [u64],
+    pub(crate) log_prior: &'a [f32],
+    pub(crate) lambda: f32,
+    pub(crate) log_lambda: f32,
+}
+
+impl<'a> BayesView<'a> {
+    /// Number of logits (the table's K).
+    #[inline]
+    pub fn logits(&self) -> usize {
+        self.axes.len()
+    }
+
+    /// Number of categories: K, or K + 1 with `background`.
+    #[inline]
+    pub fn categories(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether the last category is `background`.
+    #[inline]
+    pub fn has_background(&self) -> bool {
+        self.categories() > self.logits()
+    }
+
+    /// Bins per logit.
+    #[inline]
+    pub fn bins(&self) -> usize {
+        self.axes.first().map_or(0, Axis::bins)
+    }
+
+    /// The additive smoothing inside the logarithm.
+    #[inline]
+    pub fn lambda(&self) -> f32 {
+        self.lambda
+    }
+
+    /// The bins of logit `j`.
+    #[inline]
+    pub fn axis(&self, j: usize) -> Option<&'a Axis> {
+        self.axes.get(j)
+    }
+
+    /// Training rows of category `c` (`c = K` is `background`).
+    #[inline]
+    pub fn rows(&self, c: usize) -> Option<u64> {
+        self.rows.get(c).copied()
+    }
+
+    /// `ln pi[c]`, the log prior of category `c`, as computed at decode.
+    #[inline]
+    pub fn log_prior(&self, c: usize) -> Option<f32> {
+        self.log_prior.get(c).copied()
+    }
+
+    /// The stored log-terms `ln(h + lambda)` of category `c` and logit `j`, one per bin.
+    #[inline]
+    pub fn terms(&self, c: usize, j: usize) -> Option<&'a [f32]> {
+        let b = self.bins();
+        let start = (c.checked_mul(self.logits())?.checked_add(j)?).checked_mul(b)?;
+        if j >= self.logits() {
+            return None;
+        }
+        self.terms.get(start..start.checked_add(b)?)
+    }
+
+    /// Every stored log-term, category-major (see the type docs).
+    #[inline]
+    pub fn all_terms(&self) -> &'a [f32] {
+        self.terms
+    }
+
+    /// Every category's training rows.
+    #[inline]
+    pub fn all_rows(&self) -> &'a [u64] {
+        self.rows
+    }
+
+    /// Every logit's axis.
+    #[inline]
+    pub fn axes(&self) -> &'a [Axis] {
+        self.axes
+    }
+
+    /// Scores of one detection into `out` (length K); `scratch` holds one value per
+    /// category. Inputs must already be checked (no NaN logit, objectness in `[0, 1]`).
+    #[inline]
+    pub(crate) fn score_into<M: Backend>(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        let k = self.logits();
+        let b = self.bins();
+        if logits.len() != k || out.len() != k || scratch.len() != self.categories() {
+            return Err(InferError::Length);
+        }
+        let mut max = f32::NEG_INFINITY;
+        for ((l, &prior), cat_terms) in scratch
+            .iter_mut()
+            .zip(self.log_prior)
+            .zip(self.terms.chunks_exact(k * b))
+        {
+            let mut sum = prior;
+            for ((axis, &x), logit_terms) in
+                self.axes.iter().zip(logits).zip(cat_terms.chunks_exact(b))
+            {
+                sum += match axis.bin(x) {
+                    Some(bin) => logit_terms.get(bin).copied().unwrap_or(self.log_lambda),
+                    None => self.log_lambda,
+                };
+            }
+            *l = sum;
+            if sum > max {
+                max = sum;
+            }
+        }
+        let mut total = 0.0f32;
+        for l in scratch.iter_mut() {
+            *l = M::exp(*l - max);
+            total += *l;
+        }
+        // `total >= 1`: the largest category contributes exp(0) = 1.
+        let scale = objectness / total;
+        for (o, &e) in out.iter_mut().zip(scratch.iter()) {
+            *o = e * scale;
+        }
+        Ok(())
+    }
+}
+
+/// Largest smoothing lambda of the Bayes head. Frequencies are at most 1, so a larger
+/// lambda would drown every histogram in the prior; and with `lambda <= 1` every stored
+/// term `ln(h + lambda)` is at most `ln 2`, which keeps the decode-time check of the
+/// frequencies (through `exp`) accurate.
+pub const MAX_LAMBDA_BAYES: f32 = 1.0;
+
+/// How far `exp(t) - lambda` may be from the frequency `h` a stored term
+/// `t = f32(ln(h + lambda))` came from, per bin: the rounding of `t` to `f32` (relative
+/// `2^-24` of `|t|`, and `|t| <= 64` for any `lambda >= 1e-27`) and the error of `exp`
+/// (a few ulp), relative to `h + lambda <= 2`.
+const TERM_TOLERANCE: f32 = 2.0 * 80.0 * f32::EPSILON;
+
+/// Checks a Bayes head's stored fields (every table invariant of §1.6) and computes the
+/// derived ones: fills `axes[j]`'s widths (from their `lo`, `hi` as stored), writes
+/// `log_prior` and returns `ln(lambda)`.
+pub(crate) fn validate(
+    k: usize,
+    bins: usize,
+    lambda: f32,
+    axes: &mut [Axis],
+    terms: &[f32],
+    rows: &[u64],
+    log_prior: &mut [f32],
+) -> Result<f32, TableError> {
+    let head = Head::Bayes;
+    if !(lambda > 0.0 && lambda <= MAX_LAMBDA_BAYES) {
+        return Err(TableError::Lambda { head });
+    }
+    let categories = rows.len();
+    if axes.len() != k
+        || !(categories == k || categories == k + 1)
+        || log_prior.len() != categories
+        || Some(terms.len()) != categories.checked_mul(k).and_then(|n| n.checked_mul(bins))
+        || bins == 0
+    {
+        return Err(TableError::BayesShape);
+    }
+    for (j, axis) in axes.iter_mut().enumerate() {
+        let class = u16::try_from(j).unwrap_or(u16::MAX);
+        *axis = Axis::new(axis.lo, axis.hi, bins).map_err(|_| TableError::Edges { head, class })?;
+    }
+    // The prior: shares of the training rows, each category non-empty.
+    let mut total = 0u64;
+    for (c, &n) in rows.iter().enumerate() {
+        let class = u16::try_from(c).unwrap_or(u16::MAX);
+        total = match total.checked_add(n) {
+            Some(t) if n > 0 => t,
+            _ => return Err(TableError::CategoryRows { class }),
+        };
+    }
+    for (lp, &n) in log_prior.iter_mut().zip(rows) {
+        *lp = math::ln(n as f32 / total as f32);
+    }
+    // Each (category, logit) histogram: ln(h + lambda) with h >= 0 and sum h = 1.
+    let log_lambda = math::ln(lambda);
+    for (i, hist) in terms.chunks_exact(bins).enumerate() {
+        let class = u16::try_from(i / k.max(1)).unwrap_or(u16::MAX);
+        let mut sum = 0.0f32;
+        for &t in hist {
+            if !t.is_finite() {
+                return Err(TableError::Frequencies { head, class });
+            }
+            let h = math::exp(t) - lambda;
+            if !(h >= -TERM_TOLERANCE) {
+                return Err(TableError::Frequencies { head, class });
+            }
+            sum += h;
+        }
+        // The rounding of each term adds up over the bins.
+        let tolerance = FREQUENCY_SUM_TOLERANCE + bins as f32 * TERM_TOLERANCE;
+        if !((sum - 1.0).abs() <= tolerance) {
+            return Err(TableError::Frequencies { head, class });
+        }
+    }
+    Ok(log_lambda)
+}

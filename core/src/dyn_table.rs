@@ -1,0 +1,416 @@
+//! A table whose shape is known only at run time (feature `alloc`), for the host
+//! (fitting, tuning, the CLI) and for `mlmap`'s build script. It owns vectors and lends
+//! them to the same [`TableView`] and decoder as [`Table`](crate::Table), so host and
+//! device accept the same bytes and compute identical scores.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+use crate::bayes::{self, BayesView};
+use crate::error::{DecodeError, EncodeError, InferError, TableError};
+use crate::gaussian::Gaussian;
+use crate::histogram::{Axis, Histogram};
+use crate::math::Backend;
+use crate::name::ClassName;
+use crate::view::{self, BayesStorage, Slots, TableView};
+use crate::wire::{self, ClassSpec, Settings};
+
+/// A validated table with a run-time number of classes and bins.
+///
+/// Same invariants, same wire format and same scores as
+/// [`Table`](crate::Table); convert with [`DynTable::from_table`] and
+/// [`Table::try_from`](crate::Table).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DynTable {
+    names: Vec<ClassName>,
+    rows: Vec<u64>,
+    priors: Vec<Gaussian>,
+    ml: Vec<Histogram<Vec<f32>>>,
+    map: Vec<Histogram<Vec<f32>>>,
+    settings: Settings,
+    bayes: Option<DynBayes>,
+}
+
+/// The Bayes head's storage.
+#[derive(Debug, Clone, PartialEq)]
+struct DynBayes {
+    axes: Vec<Axis>,
+    terms: Vec<f32>,
+    rows: Vec<u64>,
+    log_prior: Vec<f32>,
+    lambda: f32,
+    log_lambda: f32,
+}
+
+/// A fitted Bayes head before validation (docs/DESIGN.md §1.6), for
+/// [`DynTable::with_bayes`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct BayesSpec {
+    /// Additive smoothing inside the logarithm, in `(0, MAX_LAMBDA_BAYES]`.
+    pub lambda: f32,
+    /// Training rows per category: the K classes, then `background` if present.
+    pub rows: Vec<u64>,
+    /// First and last edge of each logit's bins (K pairs).
+    pub ranges: Vec<(f32, f32)>,
+    /// `ln(h + lambda)` per category, logit and bin, category-major (see
+    /// [`BayesView`]).
+    pub terms: Vec<f32>,
+}
+
+impl DynTable {
+    /// Builds a table without a Bayes head from fitted statistics, checking every
+    /// invariant; all classes must have the bin counts of the first.
+    ///
+    /// # Errors
+    ///
+    /// The first broken invariant.
+    pub fn new(
+        settings: Settings,
+        classes: Vec<ClassSpec<'_, Vec<f32>, Vec<f32>>>,
+    ) -> Result<Self, TableError> {
+        settings.validate()?;
+        if classes.len() < 2 || classes.len() >= usize::from(u16::MAX) {
+            return Err(TableError::ClassCount);
+        }
+        let bins_ml = classes.first().map_or(0, |c| c.ml_freqs.len());
+        let bins_map = classes.first().map_or(0, |c| c.map_freqs.len());
+        let mut t = Self {
+            names: Vec::with_capacity(classes.len()),
+            rows: Vec::with_capacity(classes.len()),
+            priors: Vec::with_capacity(classes.len()),
+            ml: Vec::with_capacity(classes.len()),
+            map: Vec::with_capacity(classes.len()),
+            settings,
+            bayes: None,
+        };
+        for (i, spec) in classes.into_iter().enumerate() {
+            let c = spec.validate(i, bins_ml, bins_map)?;
+            t.names.push(c.name);
+            t.rows.push(c.rows);
+            t.priors.push(c.prior);
+            t.ml.push(c.ml);
+            t.map.push(c.map);
+        }
+        view::check_unique_names(&t.names)?;
+        Ok(t)
+    }
+
+    /// Adds (or replaces) the Bayes head, checking every invariant of §1.6.
+    ///
+    /// # Errors
+    ///
+    /// [`TableError::BayesShape`] when the lengths do not fit K (categories K or K + 1,
+    /// K ranges, categories * K * bins terms); otherwise the first broken invariant.
+    pub fn with_bayes(mut self, spec: BayesSpec) -> Result<Self, TableError> {
+        let k = self.k();
+        let categories = spec.rows.len();
+        let bins = match categories.checked_mul(k) {
+            Some(n) if n > 0 && spec.terms.len().is_multiple_of(n) => spec.terms.len() / n,
+            _ => return Err(TableError::BayesShape),
+        };
+        if spec.ranges.len() != k || bins > usize::from(u16::MAX) {
+            return Err(TableError::BayesShape);
+        }
+        let mut axes: Vec<Axis> = spec
+            .ranges
+            .iter()
+            .map(|&(lo, hi)| Axis {
+                lo,
+                hi,
+                ..Axis::ZERO
+            })
+            .collect();
+        let mut log_prior = vec![0.0; categories];
+        let log_lambda = bayes::validate(
+            k,
+            bins,
+            spec.lambda,
+            &mut axes,
+            &spec.terms,
+            &spec.rows,
+            &mut log_prior,
+        )?;
+        self.bayes = Some(DynBayes {
+            axes,
+            terms: spec.terms,
+            rows: spec.rows,
+            log_prior,
+            lambda: spec.lambda,
+            log_lambda,
+        });
+        Ok(self)
+    }
+
+    /// The table without its Bayes head.
+    pub fn without_bayes(mut self) -> Self {
+        self.bayes = None;
+        self
+    }
+
+    /// Decodes and validates a table of any shape.
+    ///
+    /// # Errors
+    ///
+    /// As [`Table::from_bytes`](crate::Table::from_bytes), except that there is no
+    /// shape to mismatch.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, DecodeError> {
+        let (header, body) = wire::open(bytes)?;
+        let k = usize::from(header.k);
+        let (bins_ml, bins_map) = (usize::from(header.bins_ml), usize::from(header.bins_map));
+        let (bins_bayes, categories) = (
+            usize::from(header.bins_bayes),
+            usize::from(header.categories),
+        );
+        // Every frequency and term takes 4 bytes of the body: refuse a header announcing
+        // more than the body holds before allocating for it.
+        let floats = k * (bins_ml + bins_map) + categories * k * bins_bayes;
+        if floats.checked_mul(4).is_none_or(|n| n > body.len()) {
+            return Err(DecodeError::Malformed);
+        }
+        let hist = |bins: usize| Histogram {
+            lo: 0.0,
+            hi: 0.0,
+            width: 0.0,
+            inv_width: 0.0,
+            freqs: vec![0.0; bins],
+        };
+        let mut t = Self {
+            names: vec![ClassName::EMPTY; k],
+            rows: vec![0; k],
+            priors: vec![Gaussian::ZERO; k],
+            ml: vec![hist(bins_ml); k],
+            map: vec![hist(bins_map); k],
+            settings: Settings::ZERO,
+            bayes: (bins_bayes > 0).then(|| DynBayes {
+                axes: vec![Axis::ZERO; k],
+                terms: vec![0.0; categories * k * bins_bayes],
+                rows: vec![0; categories],
+                log_prior: vec![0.0; categories],
+                lambda: 0.0,
+                log_lambda: 0.0,
+            }),
+        };
+        let mut raw_names = vec![""; k];
+        let mut lens = vec![(0, 0); k];
+        Slots {
+            names: &mut t.names,
+            raw_names: &mut raw_names,
+            lens: &mut lens,
+            rows: &mut t.rows,
+            priors: &mut t.priors,
+            ml: &mut t.ml,
+            map: &mut t.map,
+            settings: &mut t.settings,
+            bayes: t.bayes.as_mut().map(|b| BayesStorage {
+                axes: &mut b.axes,
+                terms: &mut b.terms,
+                rows: &mut b.rows,
+                log_prior: &mut b.log_prior,
+                lambda: &mut b.lambda,
+                log_lambda: &mut b.log_lambda,
+            }),
+        }
+        .decode(&header, body)?;
+        if k < 2 {
+            return Err(TableError::ClassCount.into());
+        }
+        wire::check_canonical(bytes.len(), &t.view())?;
+        Ok(t)
+    }
+
+    /// The table as a [`TableView`], the implementation every kind of table shares.
+    #[inline]
+    pub fn view(&self) -> TableView<'_, Vec<f32>, Vec<f32>> {
+        TableView {
+            names: &self.names,
+            rows: &self.rows,
+            priors: &self.priors,
+            ml: &self.ml,
+            map: &self.map,
+            bayes: self.bayes.as_ref().map(|b| BayesView {
+                axes: &b.axes,
+                terms: &b.terms,
+                rows: &b.rows,
+                log_prior: &b.log_prior,
+                lambda: b.lambda,
+                log_lambda: b.log_lambda,
+            }),
+            settings: &self.settings,
+        }
+    }
+
+    /// Encodes the table (the same bytes [`Table::to_slice`](crate::Table::to_slice)
+    /// writes for an equal table).
+    ///
+    /// # Errors
+    ///
+    /// Never in practice: the buffer is sized from the table.
+    pub fn to_vec(&self) -> Result<Vec<u8>, EncodeError> {
+        let view = self.view();
+        let mut buf = vec![0u8; view.encoded_len()];
+        let len = view.encode(&mut buf)?.len();
+        buf.truncate(len);
+        Ok(buf)
+    }
+
+    /// The statistics of class `i` (ML and MAP heads), as slices.
+    pub fn spec(&self, i: usize) -> Option<ClassSpec<'_, &[f32], &[f32]>> {
+        self.view().spec(i)
+    }
+
+    /// Number of classes K.
+    pub fn k(&self) -> usize {
+        self.names.len()
+    }
+
+    /// Bins of the ML head.
+    pub fn bins_ml(&self) -> usize {
+        self.view().bins_ml()
+    }
+
+    /// Bins of the MAP head.
+    pub fn bins_map(&self) -> usize {
+        self.view().bins_map()
+    }
+
+    /// Class names in order.
+    pub fn class_names(&self) -> impl ExactSizeIterator<Item = &str> + '_ {
+        self.names.iter().map(ClassName::as_str)
+    }
+
+    /// Hyper-parameters and policies of the ML and MAP heads.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Training rows per class.
+    pub fn rows(&self) -> &[u64] {
+        &self.rows
+    }
+
+    /// The ML histograms, one per class.
+    pub fn ml_histograms(&self) -> &[Histogram<Vec<f32>>] {
+        &self.ml
+    }
+
+    /// The MAP histograms, one per class.
+    pub fn map_histograms(&self) -> &[Histogram<Vec<f32>>] {
+        &self.map
+    }
+
+    /// The Gaussian priors, one per class.
+    pub fn priors(&self) -> &[Gaussian] {
+        &self.priors
+    }
+
+    /// The Bayes head, if the table has one.
+    pub fn bayes(&self) -> Option<BayesView<'_>> {
+        self.view().bayes()
+    }
+
+    /// ML scores of one detection into `out` (length K); `scratch` is any K floats.
+    ///
+    /// # Errors
+    ///
+    /// As [`Table::ml`](crate::Table::ml), plus [`InferError::Length`] when a slice
+    /// does not have K entries.
+    pub fn ml_into(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        self.view().ml_into(logits, objectness, out, scratch)
+    }
+
+    /// MAP scores of one detection with backend `M` into `out` (length K).
+    ///
+    /// # Errors
+    ///
+    /// As [`DynTable::ml_into`].
+    pub fn map_into<M: Backend>(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        self.view().map_into::<M>(logits, objectness, out, scratch)
+    }
+
+    /// Bayes scores of one detection with backend `M` into `out` (length K);
+    /// `scratch` holds one float per Bayes category (K or K + 1).
+    ///
+    /// # Errors
+    ///
+    /// [`InferError::NoBayesHead`] without that head; otherwise as
+    /// [`DynTable::ml_into`].
+    pub fn bayes_into<M: Backend>(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        self.view()
+            .bayes_into::<M>(logits, objectness, out, scratch)
+    }
+
+    /// The run-time shaped copy of a fixed-size table.
+    pub fn from_table<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+    >(
+        t: &crate::Table<K, B_ML, B_MAP, B_BAYES, C>,
+    ) -> Self {
+        let v = t.view();
+        Self {
+            names: v.names.to_vec(),
+            rows: v.rows.to_vec(),
+            priors: v.priors.to_vec(),
+            ml: v.ml.iter().map(to_vec_hist).collect(),
+            map: v.map.iter().map(to_vec_hist).collect(),
+            settings: *v.settings,
+            bayes: v.bayes.map(|b| DynBayes {
+                axes: b.axes.to_vec(),
+                terms: b.terms.to_vec(),
+                rows: b.rows.to_vec(),
+                log_prior: b.log_prior.to_vec(),
+                lambda: b.lambda,
+                log_lambda: b.log_lambda,
+            }),
+        }
+    }
+}
+
+fn to_vec_hist<const B: usize>(h: &Histogram<[f32; B]>) -> Histogram<Vec<f32>> {
+    Histogram {
+        lo: h.lo,
+        hi: h.hi,
+        width: h.width,
+        inv_width: h.inv_width,
+        freqs: h.freqs.to_vec(),
+    }
+}
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+    > TryFrom<&DynTable> for crate::Table<K, B_ML, B_MAP, B_BAYES, C>
+{
+    type Error = DecodeError;
+
+    /// Converts through the wire format, so every check of
+    /// [`Table::from_bytes`](crate::Table::from_bytes) applies.
+    fn try_from(t: &DynTable) -> Result<Self, DecodeError> {
+        let bytes = t.to_vec().map_err(|_| DecodeError::Malformed)?;
+        Self::from_bytes(&bytes)
+    }
+}

@@ -1,0 +1,161 @@
+//! Rust source for a table embedded at build time (docs/DESIGN.md §5, way 2). Not part
+//! of the API: `mlmap`'s build script writes [`rust_source`] of a decoded, validated
+//! [`DynTable`] to `$OUT_DIR`; the source calls the constructors of `embed.rs`.
+
+use alloc::format;
+use alloc::string::String;
+use alloc::vec::Vec;
+use core::fmt::Write as _;
+
+use crate::histogram::{EdgeMode, Histogram, UpperTail};
+use crate::DynTable;
+
+/// An `f32` as an exact, const-evaluable expression.
+fn f(v: f32) -> String {
+    format!("f32::from_bits(0x{:08x})", v.to_bits())
+}
+
+fn floats(values: &[f32]) -> String {
+    let v: Vec<String> = values.iter().map(|&x| f(x)).collect();
+    format!("[{}]", v.join(", "))
+}
+
+fn hist(h: &Histogram<Vec<f32>>) -> String {
+    format!(
+        "E::histogram({}, {}, {}, {}, {})",
+        f(h.lo),
+        f(h.hi),
+        f(h.width),
+        f(h.inv_width),
+        floats(&h.freqs)
+    )
+}
+
+/// Rust source defining `K`, `BINS_ML`, `BINS_MAP`, `BINS_BAYES`, `CATEGORIES`,
+/// `EmbeddedTable`, `SOURCE`, `BYTES` and `TABLE` for the table `t` decoded from
+/// `bytes` (read from `source`). `krate` is the path the source names this crate by.
+pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> String {
+    let v = t.view();
+    let k = v.k();
+    let bayes = v.bayes();
+    let (bins_bayes, categories) = bayes.map_or((0, 0), |b| (b.bins(), b.categories()));
+    let mut s = String::new();
+    let _ = writeln!(s, "use {krate}::__embed as E;");
+    let consts = [
+        ("Number of classes of the embedded table.", "K", k),
+        ("ML bins of the embedded table.", "BINS_ML", v.bins_ml()),
+        ("MAP bins of the embedded table.", "BINS_MAP", v.bins_map()),
+        (
+            "Bayes bins of the embedded table (0: no Bayes head).",
+            "BINS_BAYES",
+            bins_bayes,
+        ),
+        (
+            "Bayes categories of the embedded table (0: no Bayes head).",
+            "CATEGORIES",
+            categories,
+        ),
+    ];
+    for (doc, name, value) in consts {
+        let _ = writeln!(s, "/// {doc}\npub const {name}: usize = {value};");
+    }
+    let _ = writeln!(
+        s,
+        "/// The type of [`TABLE`].\npub type EmbeddedTable = {krate}::Table<K, BINS_ML, BINS_MAP, BINS_BAYES, CATEGORIES>;"
+    );
+    let _ = writeln!(
+        s,
+        "/// The file the table was embedded from.\npub const SOURCE: &str = {source:?};"
+    );
+    let _ = writeln!(
+        s,
+        "/// The embedded file's bytes (for checks; firmware needs only [`TABLE`])."
+    );
+    let _ = writeln!(s, "pub static BYTES: [u8; {}] = {:?};", bytes.len(), bytes);
+    let names: Vec<String> = v
+        .names
+        .iter()
+        .map(|n| format!("E::class_name({}, {:?})", n.len, n.bytes))
+        .collect();
+    let priors: Vec<String> = v
+        .priors
+        .iter()
+        .map(|g| {
+            format!(
+                "E::gaussian({}, {}, {}, {})",
+                f(g.mean),
+                f(g.var),
+                f(g.neg_half_inv_var),
+                f(g.norm)
+            )
+        })
+        .collect();
+    let ml: Vec<String> = v.ml.iter().map(hist).collect();
+    let map: Vec<String> = v.map.iter().map(hist).collect();
+    let st = v.settings();
+    let edge = match st.edge_mode {
+        EdgeMode::Linspace => "Linspace",
+        EdgeMode::Matlab => "Matlab",
+    };
+    let tail = match st.upper_tail {
+        UpperTail::Zero => "Zero",
+        UpperTail::Clamp => "Clamp",
+    };
+    let (axes, terms, brows, log_prior, lambda, log_lambda) = match bayes {
+        Some(b) => {
+            let axes: Vec<String> = b
+                .axes()
+                .iter()
+                .map(|a| {
+                    format!(
+                        "E::axis({}, {}, {}, {}, {})",
+                        f(a.lo),
+                        f(a.hi),
+                        f(a.width),
+                        f(a.inv_width),
+                        a.bins
+                    )
+                })
+                .collect();
+            let per_category: Vec<String> = b
+                .all_terms()
+                .chunks(k * bins_bayes)
+                .map(|cat| {
+                    let per_logit: Vec<String> = cat.chunks(bins_bayes).map(floats).collect();
+                    format!("[{}]", per_logit.join(", "))
+                })
+                .collect();
+            (
+                format!("[{}]", axes.join(", ")),
+                format!("[{}]", per_category.join(",\n        ")),
+                format!("{:?}", b.all_rows()),
+                floats(b.log_prior),
+                f(b.lambda),
+                f(b.log_lambda),
+            )
+        }
+        None => (
+            format!("[E::axis(0.0, 0.0, 0.0, 0.0, 0); {k}]"),
+            "[]".into(),
+            "[]".into(),
+            "[]".into(),
+            "0.0".into(),
+            "0.0".into(),
+        ),
+    };
+    let _ = writeln!(
+        s,
+        "/// The validated table, ready to score: no decoding at start-up.\n\
+         pub static TABLE: EmbeddedTable = E::table(\n    [{}],\n    {:?},\n    [{}],\n    [{}],\n    [{}],\n    \
+         {krate}::Settings {{ lambda_ml: {}, lambda_map: {}, edge_mode: {krate}::EdgeMode::{edge}, \
+         upper_tail: {krate}::UpperTail::{tail} }},\n    {axes},\n    {terms},\n    {brows},\n    {log_prior},\n    {lambda},\n    {log_lambda},\n);",
+        names.join(", "),
+        v.rows,
+        priors.join(", "),
+        ml.join(",\n        "),
+        map.join(",\n        "),
+        f(st.lambda_ml),
+        f(st.lambda_map),
+    );
+    s
+}

@@ -1,0 +1,357 @@
+//! One table, whatever holds it: [`TableView`] borrows a table's storage and is the
+//! single implementation of everything a table does (describe a class, encode, check
+//! the canonical encoding, score with each head); [`Slots`] borrows it mutably and is
+//! the single decoder and validator. The fixed-size [`Table`](crate::Table) (arrays) and
+//! the host's [`DynTable`](crate::DynTable) (vectors) only own storage and lend it here.
+
+use crate::bayes::{self, BayesView};
+use crate::error::{DecodeError, EncodeError, Head, InferError, TableError};
+use crate::gaussian::Gaussian;
+use crate::histogram::{Axis, Histogram};
+use crate::layer;
+use crate::math::Backend;
+use crate::name::ClassName;
+use crate::wire::{self, BayesSlots, ClassFields, ClassSpec, Header, Settings};
+
+/// A validated table borrowed from its storage: `F` and `G` hold the ML and MAP
+/// frequencies of one class (`[f32; B]` or `Vec<f32>`).
+#[derive(Debug, Clone, Copy)]
+pub struct TableView<'a, F, G> {
+    pub(crate) names: &'a [ClassName],
+    pub(crate) rows: &'a [u64],
+    pub(crate) priors: &'a [Gaussian],
+    pub(crate) ml: &'a [Histogram<F>],
+    pub(crate) map: &'a [Histogram<G>],
+    pub(crate) bayes: Option<BayesView<'a>>,
+    pub(crate) settings: &'a Settings,
+}
+
+impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
+    /// Number of classes K.
+    #[inline]
+    pub fn k(&self) -> usize {
+        self.names.len()
+    }
+
+    /// Bins of the ML head.
+    #[inline]
+    pub fn bins_ml(&self) -> usize {
+        self.ml.first().map_or(0, Histogram::bins)
+    }
+
+    /// Bins of the MAP head.
+    #[inline]
+    pub fn bins_map(&self) -> usize {
+        self.map.first().map_or(0, Histogram::bins)
+    }
+
+    /// Hyper-parameters and policies of the ML and MAP heads.
+    #[inline]
+    pub fn settings(&self) -> &'a Settings {
+        self.settings
+    }
+
+    /// The Bayes head, if the table has one.
+    #[inline]
+    pub fn bayes(&self) -> Option<BayesView<'a>> {
+        self.bayes
+    }
+
+    /// Name of class `i`.
+    #[inline]
+    pub fn class_name(&self, i: usize) -> Option<&'a str> {
+        self.names.get(i).map(ClassName::as_str)
+    }
+
+    /// Index of the class called `name`.
+    pub fn class_index(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n.as_str() == name)
+    }
+
+    /// The statistics of class `i` (ML and MAP heads), as slices.
+    pub fn spec(&self, i: usize) -> Option<ClassSpec<'a, &'a [f32], &'a [f32]>> {
+        let (ml, map, prior) = (self.ml.get(i)?, self.map.get(i)?, self.priors.get(i)?);
+        Some(ClassSpec {
+            name: self.names.get(i)?.as_str(),
+            rows: *self.rows.get(i)?,
+            mean: prior.mean,
+            variance: prior.var,
+            ml_range: (ml.lo, ml.hi),
+            ml_freqs: ml.freqs.as_ref(),
+            map_range: (map.lo, map.hi),
+            map_freqs: map.freqs.as_ref(),
+        })
+    }
+
+    /// Encodes the table into `buf` and returns the written prefix (docs/FORMAT.md).
+    ///
+    /// # Errors
+    ///
+    /// [`EncodeError::BufferTooSmall`] when `buf` is too small.
+    pub fn encode<'b>(&self, buf: &'b mut [u8]) -> Result<&'b mut [u8], EncodeError> {
+        wire::encode(self, buf)
+    }
+
+    /// Number of bytes [`TableView::encode`] writes.
+    pub fn encoded_len(&self) -> usize {
+        wire::encoded_len(self).unwrap_or(usize::MAX)
+    }
+
+    /// ML scores of one detection into `out` (K entries); `scratch` is any K floats.
+    ///
+    /// # Errors
+    ///
+    /// As [`Table::ml`](crate::Table::ml), plus [`InferError::Length`] when a slice
+    /// does not have K entries.
+    #[inline]
+    pub fn ml_into(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        if scratch.len() != self.k() {
+            return Err(InferError::Length);
+        }
+        layer::ml_into(
+            self.ml,
+            self.settings.lambda_ml,
+            self.settings.upper_tail,
+            logits,
+            objectness,
+            out,
+            scratch,
+        )
+    }
+
+    /// MAP scores of one detection with backend `M` into `out` (K entries).
+    ///
+    /// # Errors
+    ///
+    /// As [`TableView::ml_into`].
+    #[inline]
+    pub fn map_into<M: Backend>(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        if scratch.len() != self.k() {
+            return Err(InferError::Length);
+        }
+        layer::map_into::<_, M>(
+            self.map,
+            self.priors,
+            self.settings.lambda_map,
+            self.settings.upper_tail,
+            logits,
+            objectness,
+            out,
+            scratch,
+        )
+    }
+
+    /// Bayes scores of one detection with backend `M` into `out` (K entries);
+    /// `scratch` holds one float per Bayes category (K or K + 1).
+    ///
+    /// # Errors
+    ///
+    /// [`InferError::NoBayesHead`] for a table without that head; otherwise as
+    /// [`TableView::ml_into`].
+    #[inline]
+    pub fn bayes_into<M: Backend>(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        let bayes = self.bayes.as_ref().ok_or(InferError::NoBayesHead)?;
+        layer::check(logits, objectness, self.k(), out.len())?;
+        bayes.score_into::<M>(logits, objectness, out, scratch)
+    }
+}
+
+/// A table's storage, borrowed mutably for decoding: the one decoder behind
+/// [`Table::from_bytes`](crate::Table::from_bytes) and `DynTable::from_bytes`. Sized
+/// from the header before parsing, so a sequence longer than announced is malformed.
+pub(crate) struct Slots<'t, 'a, F, G> {
+    pub(crate) names: &'t mut [ClassName],
+    /// The names as parsed, validated after the body is read.
+    pub(crate) raw_names: &'t mut [&'a str],
+    /// Frequencies each class had, ML and MAP.
+    pub(crate) lens: &'t mut [(usize, usize)],
+    pub(crate) rows: &'t mut [u64],
+    pub(crate) priors: &'t mut [Gaussian],
+    pub(crate) ml: &'t mut [Histogram<F>],
+    pub(crate) map: &'t mut [Histogram<G>],
+    pub(crate) settings: &'t mut Settings,
+    pub(crate) bayes: Option<BayesStorage<'t>>,
+}
+
+/// A Bayes head's storage, borrowed mutably.
+pub(crate) struct BayesStorage<'t> {
+    pub(crate) axes: &'t mut [Axis],
+    pub(crate) terms: &'t mut [f32],
+    pub(crate) rows: &'t mut [u64],
+    pub(crate) log_prior: &'t mut [f32],
+    pub(crate) lambda: &'t mut f32,
+    pub(crate) log_lambda: &'t mut f32,
+}
+
+impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> wire::BodySink<'a>
+    for Slots<'_, 'a, F, G>
+{
+    fn capacity(&self) -> usize {
+        self.names.len()
+    }
+
+    fn freqs(&mut self, class: usize, head: Head) -> &mut [f32] {
+        match head {
+            Head::Ml => self.ml.get_mut(class).map(|h| h.freqs.as_mut()),
+            Head::Map => self.map.get_mut(class).map(|h| h.freqs.as_mut()),
+            Head::Bayes => None,
+        }
+        .unwrap_or_default()
+    }
+
+    fn class(&mut self, class: usize, f: ClassFields<'a>) {
+        if let (Some(name), Some(len), Some(rows), Some(prior), Some(ml), Some(map)) = (
+            self.raw_names.get_mut(class),
+            self.lens.get_mut(class),
+            self.rows.get_mut(class),
+            self.priors.get_mut(class),
+            self.ml.get_mut(class),
+            self.map.get_mut(class),
+        ) {
+            *name = f.name;
+            *len = (f.ml_len, f.map_len);
+            *rows = f.rows;
+            (prior.mean, prior.var) = (f.mean, f.variance);
+            (ml.lo, ml.hi) = f.ml_range;
+            (map.lo, map.hi) = f.map_range;
+        }
+    }
+
+    fn bayes(&mut self) -> BayesSlots<'_> {
+        match &mut self.bayes {
+            Some(b) => BayesSlots {
+                rows: b.rows,
+                axes: b.axes,
+                terms: b.terms,
+            },
+            None => BayesSlots {
+                rows: &mut [],
+                axes: &mut [],
+                terms: &mut [],
+            },
+        }
+    }
+}
+
+impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'_, 'a, F, G> {
+    /// Parses `body` (announced by `header`) into the storage and validates every
+    /// class and the Bayes head in place: nothing the size of a class is copied.
+    pub(crate) fn decode(mut self, header: &Header, body: &'a [u8]) -> Result<(), DecodeError> {
+        let has_bayes = header.bins_bayes > 0;
+        if has_bayes != self.bayes.is_some() {
+            return Err(DecodeError::Malformed);
+        }
+        let parsed = wire::parse_body_into(body, has_bayes, &mut self)?;
+        let k = self.names.len();
+        if parsed.classes != k || usize::from(header.k) != k {
+            return Err(DecodeError::Malformed);
+        }
+        *self.settings = parsed.settings;
+        let (bins_ml, bins_map) = (usize::from(header.bins_ml), usize::from(header.bins_map));
+        for i in 0..k {
+            let class = u16::try_from(i).unwrap_or(u16::MAX);
+            let (ml_len, map_len) = self.lens.get(i).copied().unwrap_or_default();
+            if ml_len != bins_ml {
+                return Err(TableError::BinCount {
+                    head: Head::Ml,
+                    class,
+                }
+                .into());
+            }
+            if map_len != bins_map {
+                return Err(TableError::BinCount {
+                    head: Head::Map,
+                    class,
+                }
+                .into());
+            }
+            self.validate_class(i, bins_ml, bins_map)?;
+        }
+        check_unique_names(self.names)?;
+        if let (Some(b), Some((lambda, lens))) = (self.bayes, parsed.bayes) {
+            let bins = usize::from(header.bins_bayes);
+            let expected = [b.rows.len(), b.axes.len(), b.terms.len()];
+            if lens != expected {
+                return Err(TableError::BayesShape.into());
+            }
+            *b.lambda = lambda;
+            *b.log_lambda = bayes::validate(k, bins, lambda, b.axes, b.terms, b.rows, b.log_prior)?;
+        }
+        Ok(())
+    }
+
+    /// Validates class `i` as parsed (raw fields, frequencies in place), with the checks
+    /// of [`ClassSpec`]; fills in its name and the derived fields.
+    fn validate_class(
+        &mut self,
+        i: usize,
+        bins_ml: usize,
+        bins_map: usize,
+    ) -> Result<(), TableError> {
+        let (Some(ml), Some(map), Some(prior), Some(&rows), Some(&name)) = (
+            self.ml.get(i),
+            self.map.get(i),
+            self.priors.get(i),
+            self.rows.get(i),
+            self.raw_names.get(i),
+        ) else {
+            return Err(TableError::ClassCount);
+        };
+        let spec = ClassSpec {
+            name,
+            rows,
+            mean: prior.mean,
+            variance: prior.var,
+            ml_range: (ml.lo, ml.hi),
+            ml_freqs: ml.freqs.as_ref(),
+            map_range: (map.lo, map.hi),
+            map_freqs: map.freqs.as_ref(),
+        };
+        let c = spec.validate(i, bins_ml, bins_map)?;
+        let (name, prior) = (c.name, c.prior);
+        let ml_width = (c.ml.width, c.ml.inv_width);
+        let map_width = (c.map.width, c.map.inv_width);
+        if let (Some(n), Some(p), Some(ml), Some(map)) = (
+            self.names.get_mut(i),
+            self.priors.get_mut(i),
+            self.ml.get_mut(i),
+            self.map.get_mut(i),
+        ) {
+            *n = name;
+            *p = prior;
+            (ml.width, ml.inv_width) = ml_width;
+            (map.width, map.inv_width) = map_width;
+        }
+        Ok(())
+    }
+}
+
+/// Checks that no name repeats an earlier one (O(K^2), decode time only).
+pub(crate) fn check_unique_names(names: &[ClassName]) -> Result<(), TableError> {
+    for (i, n) in names.iter().enumerate() {
+        if names.iter().take(i).any(|m| m == n) {
+            return Err(TableError::DuplicateName {
+                class: u16::try_from(i).unwrap_or(u16::MAX),
+            });
+        }
+    }
+    Ok(())
+}
