@@ -7,7 +7,8 @@
 //! ```
 //!
 //! Kinds: `sigmoid`, `softmax`, `ml`, `map`, `map_fast` (MAP with the `FastMath`
-//! backend), `map_micromath` (MAP with `Micromath`), `sigmoid_fast` (the Sigmoid layer
+//! backend), `map_micromath` (MAP with `Micromath`), `bayes` and `bayes_fast` (the Bayes head with
+//! `Libm` and `FastMath`), `sigmoid_fast` (the Sigmoid layer
 //! with `FastMath`), `decode`, and `noop` (a layer that only copies the logits: the cost
 //! of the loop around the layer). The detections are
 //! the first 4096 rows of `examples/data/test.csv`, cycled in file order; use an N that
@@ -29,7 +30,7 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
         eprintln!(
-            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|decode N"
+            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|decode N"
         );
         return ExitCode::from(2);
     };
@@ -44,6 +45,8 @@ fn main() -> ExitCode {
         "map" => |t, x, o| t.map(x, o),
         "map_fast" => |t, x, o| t.map_with::<FastMath>(x, o),
         "map_micromath" => |t, x, o| t.map_with::<Micromath>(x, o),
+        "bayes" => |t, x, o| t.bayes(x, o),
+        "bayes_fast" => |t, x, o| t.bayes_with::<FastMath>(x, o),
         "decode" => {
             let mut ok = 0usize;
             for _ in 0..n {

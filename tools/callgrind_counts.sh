@@ -10,7 +10,8 @@
 # of the loop around the layer (kind `noop`: fetch a row, call through a function pointer,
 # fold the result into a checksum). Kinds: the Sigmoid layer with libm and with FastMath,
 # Softmax, ML, MAP with libm (`map`), FastMath (`map_fast`) and Micromath
-# (`map_micromath`), and decoding.
+# (`map_micromath`), the Bayes head with libm (`bayes`) and FastMath (`bayes_fast`), and
+# decoding.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -30,14 +31,14 @@ count() {
 
 declare -A per
 printf '%-14s %14s %14s %12s\n' kind "Ir(N=$n)" "Ir(2N)" "Ir/detection"
-for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath decode; do
+for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast decode; do
     a="$(count "$kind" "$n")"
     b="$(count "$kind" "$((2 * n))")"
     per[$kind]="$(python3 -c "print(f'{($b - $a) / $n:.1f}')")"
     printf '%-14s %14s %14s %12s\n' "$kind" "$a" "$b" "${per[$kind]}"
 done
 echo
-for kind in sigmoid_fast softmax ml map map_fast map_micromath; do
+for kind in sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast; do
     python3 -c "
 g, s, n = ${per[$kind]}, ${per[sigmoid]}, ${per[noop]}
 print(f'$kind / sigmoid = {g / s:.3f} (net of the loop: {(g - n) / (s - n):.3f})')"

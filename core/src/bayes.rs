@@ -31,8 +31,9 @@ use crate::math::{self, Backend};
 
 /// The Bayes head of a table, borrowed from its storage.
 ///
-/// `terms` is laid out category-major: the `B` log-terms of category `c` and logit `j`
-/// start at `(c * K + j) * B`.
+/// `terms` is laid out logit-major: the log-terms of logit `j` and bin `b` for the `C`
+/// categories are contiguous, starting at `(j * B + b) * C`, so a detection adds one
+/// contiguous row of `C` terms per logit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BayesView<'a> {
     pub(crate) axes: &'a [Axis],
@@ -92,18 +93,17 @@ impl<'a> BayesView<'a> {
         self.log_prior.get(c).copied()
     }
 
-    /// The stored log-terms `ln(h + lambda)` of category `c` and logit `j`, one per bin.
+    /// The stored log-term `ln(h + lambda)` of category `c`, logit `j` and bin `bin`.
     #[inline]
-    pub fn terms(&self, c: usize, j: usize) -> Option<&'a [f32]> {
-        let b = self.bins();
-        let start = (c.checked_mul(self.logits())?.checked_add(j)?).checked_mul(b)?;
-        if j >= self.logits() {
+    pub fn term(&self, c: usize, j: usize, bin: usize) -> Option<f32> {
+        let (b, cats) = (self.bins(), self.categories());
+        if c >= cats || j >= self.logits() || bin >= b {
             return None;
         }
-        self.terms.get(start..start.checked_add(b)?)
+        self.terms.get((j * b + bin) * cats + c).copied()
     }
 
-    /// Every stored log-term, category-major (see the type docs).
+    /// Every stored log-term, logit-major (see the type docs).
     #[inline]
     pub fn all_terms(&self) -> &'a [f32] {
         self.terms
@@ -136,29 +136,38 @@ impl<'a> BayesView<'a> {
         if logits.len() != k || out.len() != k || scratch.len() != self.categories() {
             return Err(InferError::Length);
         }
-        let mut max = f32::NEG_INFINITY;
-        for ((l, &prior), cat_terms) in scratch
-            .iter_mut()
-            .zip(self.log_prior)
-            .zip(self.terms.chunks_exact(k * b))
-        {
-            let mut sum = prior;
-            for ((axis, &x), logit_terms) in
-                self.axes.iter().zip(logits).zip(cat_terms.chunks_exact(b))
-            {
-                sum += match axis.bin(x) {
-                    Some(bin) => logit_terms.get(bin).copied().unwrap_or(self.log_lambda),
-                    None => self.log_lambda,
-                };
-            }
-            *l = sum;
-            if sum > max {
-                max = sum;
-            }
+        // Each logit's bin is looked up once, and its row of C terms added to the
+        // log-scores (left to right over the logits, after the prior).
+        for (l, &prior) in scratch.iter_mut().zip(self.log_prior) {
+            *l = prior;
         }
+        let cats = scratch.len();
+        let mut offset = 0usize;
+        for (axis, &x) in self.axes.iter().zip(logits) {
+            let row = axis.bin(x).and_then(|bin| {
+                self.terms
+                    .get((offset + bin) * cats..(offset + bin + 1) * cats)
+            });
+            match row {
+                Some(row) => {
+                    for (l, &t) in scratch.iter_mut().zip(row) {
+                        *l += t;
+                    }
+                }
+                None => {
+                    for l in scratch.iter_mut() {
+                        *l += self.log_lambda;
+                    }
+                }
+            }
+            offset += b;
+        }
+        // Every log-score is finite (the terms and priors are), so `max` is too.
+        let max = scratch.iter().copied().fold(f32::NEG_INFINITY, f32::max);
         let mut total = 0.0f32;
         for l in scratch.iter_mut() {
-            *l = M::exp(*l - max);
+            // exp(0) = 1 exactly for the largest: one `exp` saved.
+            *l = if *l == max { 1.0 } else { M::exp(*l - max) };
             total += *l;
         }
         // `total >= 1`: the largest category contributes exp(0) = 1.
@@ -223,10 +232,19 @@ pub(crate) fn validate(
     for (lp, &n) in log_prior.iter_mut().zip(rows) {
         *lp = math::ln(n as f32 / total as f32);
     }
-    // Each (category, logit) histogram: ln(h + lambda) with h >= 0 and sum h = 1.
+    // Each (category, logit) histogram: ln(h + lambda) with h >= 0 and sum h = 1. The
+    // terms of logit j, bin b, category c are at (j * B + b) * C + c.
     let log_lambda = math::ln(lambda);
-    for (i, hist) in terms.chunks_exact(bins).enumerate() {
-        let class = u16::try_from(i / k.max(1)).unwrap_or(u16::MAX);
+    for i in 0..categories * k {
+        let (c, j) = (i % categories, i / categories);
+        let hist = terms
+            .get(j * bins * categories..)
+            .unwrap_or(&[])
+            .iter()
+            .skip(c)
+            .step_by(categories)
+            .take(bins);
+        let class = u16::try_from(c).unwrap_or(u16::MAX);
         let mut sum = 0.0f32;
         for &t in hist {
             if !t.is_finite() {

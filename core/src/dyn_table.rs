@@ -52,8 +52,7 @@ pub struct BayesSpec {
     pub rows: Vec<u64>,
     /// First and last edge of each logit's bins (K pairs).
     pub ranges: Vec<(f32, f32)>,
-    /// `ln(h + lambda)` per category, logit and bin, category-major (see
-    /// [`BayesView`]).
+    /// `ln(h + lambda)` per logit, bin and category, logit-major (see [`BayesView`]).
     pub terms: Vec<f32>,
 }
 
@@ -340,7 +339,8 @@ impl DynTable {
     }
 
     /// Bayes scores of one detection with backend `M` into `out` (length K);
-    /// `scratch` holds one float per Bayes category (K or K + 1).
+    /// `scratch` holds one float per Bayes category (K or K + 1). `M = FastMath` gives
+    /// the bits of [`Table::bayes`](crate::Table::bayes).
     ///
     /// # Errors
     ///

@@ -32,13 +32,14 @@ pub const fn class_name(len: u8, bytes: [u8; crate::NAME_MAX]) -> ClassName {
 }
 
 /// A Bayes axis from validated fields.
-pub const fn axis(lo: f32, hi: f32, width: f32, inv_width: f32, bins: u16) -> Axis {
+pub const fn axis(lo: f32, hi: f32, width: f32, inv_width: f32, bins: u16, cap: f32) -> Axis {
     Axis {
         lo,
         hi,
         width,
         inv_width,
         bins,
+        cap,
     }
 }
 
@@ -58,7 +59,7 @@ pub const fn table<
     map: [Histogram<[f32; B_MAP]>; K],
     settings: Settings,
     bayes_axes: [Axis; K],
-    bayes_terms: [[[f32; B_BAYES]; K]; C],
+    bayes_terms: [[[f32; C]; B_BAYES]; K],
     bayes_rows: [u64; C],
     bayes_log_prior: [f32; C],
     bayes_lambda: f32,

@@ -108,26 +108,27 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
                 .iter()
                 .map(|a| {
                     format!(
-                        "E::axis({}, {}, {}, {}, {})",
+                        "E::axis({}, {}, {}, {}, {}, {})",
                         f(a.lo),
                         f(a.hi),
                         f(a.width),
                         f(a.inv_width),
-                        a.bins
+                        a.bins,
+                        f(a.cap)
                     )
                 })
                 .collect();
-            let per_category: Vec<String> = b
+            let per_logit: Vec<String> = b
                 .all_terms()
-                .chunks(k * bins_bayes)
-                .map(|cat| {
-                    let per_logit: Vec<String> = cat.chunks(bins_bayes).map(floats).collect();
-                    format!("[{}]", per_logit.join(", "))
+                .chunks(bins_bayes * categories)
+                .map(|logit| {
+                    let per_bin: Vec<String> = logit.chunks(categories).map(floats).collect();
+                    format!("[{}]", per_bin.join(", "))
                 })
                 .collect();
             (
                 format!("[{}]", axes.join(", ")),
-                format!("[{}]", per_category.join(",\n        ")),
+                format!("[{}]", per_logit.join(",\n        ")),
                 format!("{:?}", b.all_rows()),
                 floats(b.log_prior),
                 f(b.lambda),
@@ -135,8 +136,8 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
             )
         }
         None => (
-            format!("[E::axis(0.0, 0.0, 0.0, 0.0, 0); {k}]"),
-            "[]".into(),
+            format!("[E::axis(0.0, 0.0, 0.0, 0.0, 0, 0.0); {k}]"),
+            format!("[[]; {k}]"),
             "[]".into(),
             "[]".into(),
             "0.0".into(),

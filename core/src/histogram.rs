@@ -161,7 +161,8 @@ impl<F: AsRef<[f32]>> Histogram<F> {
     /// The bin of `x`, for `lo <= x <= hi`.
     #[inline(always)]
     fn bin_in_support(&self, x: f32) -> usize {
-        locate(self.lo, self.width, self.inv_width, self.bins() - 1, x)
+        let last = self.bins() - 1;
+        locate(self.lo, self.width, self.inv_width, last, cap(last), x)
     }
 
     /// The likelihood `L` of `x`: the frequency of its bin, 0 outside the support, with
@@ -223,13 +224,20 @@ fn inner_edge(lo: f32, width: f32, k: usize) -> f32 {
     lo + (k as u32 as f32) * width
 }
 
+/// `1.5 * 2^23`: sums with it in `[2^23, 2^24)` are rounded to integers.
+const ROUNDER: f32 = 12_582_912.0;
+
+/// `ROUNDER + last`, the largest estimate [`locate`] may return, as its exact `f32`.
+#[inline(always)]
+fn cap(last: usize) -> f32 {
+    ROUNDER + last as u32 as f32
+}
+
 /// The bin of `x` among `last + 1` equal-width bins starting at `lo`, for `x` inside
 /// the support (`lo <= x <= e_B`): the O(1) lookup of the module docs, shared by
 /// [`Histogram`] and [`Axis`].
 #[inline(always)]
-fn locate(lo: f32, width: f32, inv_width: f32, last: usize, x: f32) -> usize {
-    /// `1.5 * 2^23`: sums with it in `[2^23, 2^24)` are rounded to integers.
-    const ROUNDER: f32 = 12_582_912.0;
+fn locate(lo: f32, width: f32, inv_width: f32, last: usize, cap: f32, x: f32) -> usize {
     // Estimate `floor(t)`, then correct against the true edges. The estimate is off
     // by at most one bin for validated tables; the corrections make the result exact
     // regardless. `0 <= t <= B (1 + eps)`, far below 2^22, so `t - 0.5 + ROUNDER`
@@ -237,7 +245,6 @@ fn locate(lo: f32, width: f32, inv_width: f32, last: usize, x: f32) -> usize {
     // estimate as an exact f32 and `k` as an integer, without float-int conversions.
     let t = (x - lo) * inv_width;
     let r = t - 0.5 + ROUNDER;
-    let cap = ROUNDER + last as u32 as f32;
     let r = if r < cap { r } else { cap };
     let kf = r - ROUNDER;
     let mut k = r.to_bits().saturating_sub(ROUNDER.to_bits()) as usize;
@@ -268,6 +275,8 @@ pub struct Axis {
     pub(crate) width: f32,
     pub(crate) inv_width: f32,
     pub(crate) bins: u16,
+    /// `ROUNDER + (bins - 1)`, precomputed for the lookup (0 for the placeholder).
+    pub(crate) cap: f32,
 }
 
 impl Axis {
@@ -278,6 +287,7 @@ impl Axis {
         width: 0.0,
         inv_width: 0.0,
         bins: 0,
+        cap: 0.0,
     };
 
     /// Validates and builds `bins` equal bins over `[lo, hi]`.
@@ -297,6 +307,7 @@ impl Axis {
             width,
             inv_width,
             bins: u16::try_from(bins).map_err(|_| HistogramError::Edges)?,
+            cap: cap(bins - 1),
         })
     }
 
@@ -338,14 +349,17 @@ impl Axis {
     /// Never.
     #[inline]
     pub fn bin(&self, x: f32) -> Option<usize> {
-        if !(x >= self.lo && x <= self.hi) || self.bins == 0 {
+        // A validated axis has `bins >= 1`; the placeholder's empty range holds nothing.
+        if !(x >= self.lo && x <= self.hi) {
             return None;
         }
+        let last = usize::from(self.bins).saturating_sub(1);
         Some(locate(
             self.lo,
             self.width,
             self.inv_width,
-            usize::from(self.bins) - 1,
+            last,
+            self.cap,
             x,
         ))
     }

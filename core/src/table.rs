@@ -70,8 +70,8 @@ pub struct Table<
     pub(crate) settings: Settings,
     /// The Bayes head's bins per logit (unused when `B_BAYES = 0`).
     pub(crate) bayes_axes: [Axis; K],
-    /// `ln(h + lambda)` per category, logit and bin.
-    pub(crate) bayes_terms: [[[f32; B_BAYES]; K]; C],
+    /// `ln(h + lambda)` per logit, bin and category (logit-major, see [`BayesView`]).
+    pub(crate) bayes_terms: [[[f32; C]; B_BAYES]; K],
     pub(crate) bayes_rows: [u64; C],
     pub(crate) bayes_log_prior: [f32; C],
     pub(crate) bayes_lambda: f32,
@@ -288,7 +288,7 @@ impl<
             map: [hist::<B_MAP>(); K],
             settings,
             bayes_axes: [Axis::ZERO; K],
-            bayes_terms: [[[0.0; B_BAYES]; K]; C],
+            bayes_terms: [[[0.0; C]; B_BAYES]; K],
             bayes_rows: [0; C],
             bayes_log_prior: [0.0; C],
             bayes_lambda: 0.0,
@@ -353,10 +353,14 @@ impl<
         Ok(Scores(out))
     }
 
-    /// Bayes scores of one detection with the default [`Libm`] backend
-    /// (docs/DESIGN.md §1.6): `OS * p_i` with `p` the posterior over the categories.
-    /// Only for a table type with a Bayes head (`B_BAYES > 0`): calling it on one
-    /// without is a compile-time error.
+    /// Bayes scores of one detection (docs/DESIGN.md §1.6): `OS * p_i` with `p` the
+    /// posterior over the categories. Only for a table type with a Bayes head
+    /// (`B_BAYES > 0`): calling it on one without is a compile-time error.
+    ///
+    /// The softmax uses the crate's own [`FastMath`](crate::FastMath) `exp` (relative
+    /// error at most [`FAST_MATH_MAX_REL_ERROR`](crate::FAST_MATH_MAX_REL_ERROR), a few
+    /// `f32` ulp): it keeps this head within 1.5 times the Sigmoid layer's instructions
+    /// (docs/PERFORMANCE.md). [`Table::bayes_with`] takes another backend, e.g. `Libm`.
     ///
     /// # Errors
     ///
@@ -367,7 +371,7 @@ impl<
     /// Never.
     #[inline]
     pub fn bayes(&self, logits: &[f32; K], objectness: f32) -> Result<Scores<K>, InferError> {
-        self.bayes_with::<Libm>(logits, objectness)
+        self.bayes_with::<crate::FastMath>(logits, objectness)
     }
 
     /// Bayes scores of one detection with the maths backend `M`.
@@ -455,8 +459,8 @@ impl<
         batch(logits, objectness, out, |x, os| self.map_with::<M>(x, os))
     }
 
-    /// Bayes scores of a batch with the default [`Libm`] backend; see
-    /// [`Table::ml_batch`]. Only for a table type with a Bayes head.
+    /// Bayes scores of a batch, as [`Table::bayes`]; see [`Table::ml_batch`]. Only for a
+    /// table type with a Bayes head.
     ///
     /// # Errors
     ///

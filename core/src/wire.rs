@@ -12,7 +12,7 @@
 //!          MAP lo, MAP hi (f32 LE), MAP frequencies (varint B + B f32 LE)
 //! Bayes    version 2 only: lambda (f32 LE), rows per category (varint C + C varint
 //!          u64), per logit its lo and hi (varint K + K pairs of f32 LE), the log-terms
-//!          (varint C*K*B + C*K*B f32 LE, category-major)
+//!          (varint K*B*C + K*B*C f32 LE, logit-major: logit, then bin, then category)
 //! CRC      CRC-32/ISO-HDLC (zlib's crc32) of every byte before it, 4 bytes LE
 //! ```
 //!

@@ -230,24 +230,25 @@ impl BayesCounts {
     }
 
     /// The head with smoothing `lambda`: log-terms `ln(count / n_c + lambda)` computed
-    /// in `f64` and rounded to `f32`.
+    /// in `f64` and rounded to `f32`, in the table's logit-major order (logit, bin,
+    /// category).
     pub fn spec(&self, lambda: f32) -> BayesSpec {
         let lambda64 = f64::from(lambda);
-        let per_category = self.k * self.bins;
-        let terms = self
-            .counts
-            .iter()
-            .enumerate()
-            .map(|(i, &count)| {
-                let n = self
-                    .rows
-                    .get(i / per_category.max(1))
-                    .copied()
-                    .unwrap_or(1)
-                    .max(1);
-                (count as f64 / n as f64 + lambda64).ln() as f32
-            })
-            .collect();
+        let (k, bins, cats) = (self.k, self.bins, self.rows.len());
+        let mut terms = Vec::with_capacity(self.counts.len());
+        for j in 0..k {
+            for b in 0..bins {
+                for (c, &n) in self.rows.iter().enumerate() {
+                    let count = self
+                        .counts
+                        .get((c * k + j) * bins + b)
+                        .copied()
+                        .unwrap_or(0);
+                    terms.push((count as f64 / n.max(1) as f64 + lambda64).ln() as f32);
+                }
+            }
+        }
+        debug_assert_eq!(terms.len(), k * bins * cats);
         BayesSpec {
             lambda,
             rows: self.rows.clone(),
