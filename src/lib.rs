@@ -78,6 +78,7 @@ mod error;
 mod fastmath;
 mod gaussian;
 mod histogram;
+pub mod invariants;
 mod layer;
 mod math;
 mod name;
