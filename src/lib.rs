@@ -78,6 +78,7 @@ pub use mlmap_core::{
 };
 
 pub mod embedded;
+pub mod invariants;
 
 #[doc(hidden)]
 pub use mlmap_core::__embed;

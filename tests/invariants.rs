@@ -18,7 +18,14 @@
 //! class `i`'s logit, so that `P_i` and every other input stay fixed; (c) class `i`'s
 //! logit moved from outside its support (`L_i = 0`, mass `lambda` whatever `P_i`) to
 //! anywhere.
+//!
+//! The invariants themselves are checked by `mlmap::invariants`, which the fuzz targets
+//! use too; this file builds the cases.
 
+use mlmap::invariants::{
+    check_error, check_monotone, check_scores, check_table, check_unknown, expected_error, Sum,
+    Violation,
+};
 use mlmap::{
     BatchError, ClassSpec, DecodeError, EdgeMode, InferError, Settings, Table, TableError,
     UpperTail,
@@ -26,7 +33,13 @@ use mlmap::{
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 
-use crate::support::{fix_crc, SUM_REL_TOL};
+use crate::support::fix_crc;
+
+/// A violated invariant as a proptest failure (so that the case is shrunk), with the
+/// context the checker does not know.
+fn holds(r: Result<(), Violation>, context: impl FnOnce() -> String) -> Result<(), TestCaseError> {
+    r.map_err(|v| TestCaseError::fail(format!("{}: {v}", context())))
+}
 
 const NAMES: [&str; 7] = [
     "car",
@@ -282,24 +295,29 @@ fn objectness() -> impl Strategy<Value = f32> {
     ]
 }
 
-/// The heads under test: ML, MAP with `Libm`, and MAP with `FastMath` when built.
+/// The heads under test: ML, MAP with `Libm`, MAP with `FastMath`, and MAP with
+/// `Micromath` when built.
 fn heads<const K: usize, const BM: usize, const BP: usize>(
     t: &Table<K, BM, BP>,
     x: &[f32; K],
     os: f32,
 ) -> Vec<(&'static str, Result<[f32; K], InferError>)> {
-    let libm = [
+    let heads = [
         ("ML", t.ml(x, os).map(|s| s.0)),
         ("MAP", t.map(x, os).map(|s| s.0)),
+        (
+            "MAP FastMath",
+            t.map_with::<mlmap::FastMath>(x, os).map(|s| s.0),
+        ),
     ];
     #[cfg(feature = "micromath")]
-    let fast = Some((
-        "MAP FastMath",
-        t.map_with::<mlmap::FastMath>(x, os).map(|s| s.0),
+    let micromath = Some((
+        "MAP Micromath",
+        t.map_with::<mlmap::Micromath>(x, os).map(|s| s.0),
     ));
     #[cfg(not(feature = "micromath"))]
-    let fast = None;
-    libm.into_iter().chain(fast).collect()
+    let micromath = None;
+    heads.into_iter().chain(micromath).collect()
 }
 
 /// Invariant 1: every score in `[0, OS]`, the scores summing to `OS` (relative 1e-5).
@@ -310,26 +328,14 @@ fn scores_in_range_and_sum_to_os<const K: usize, const BM: usize, const BP: usiz
 ) -> Result<(), TestCaseError> {
     for (head, scores) in heads(t, x, os) {
         let scores = scores.map_err(|e| TestCaseError::fail(format!("{head}: {e:?}")))?;
-        for (i, &s) in scores.iter().enumerate() {
-            prop_assert!(
-                (0.0..=os).contains(&s),
-                "{head} score {i} = {s} outside [0, {os}] for {x:?}"
-            );
-        }
-        // f32 cannot hold a score more finely than its smallest subnormal: below
-        // OS ~ 1e-39 each score carries up to that much rounding, which the relative
-        // bound alone cannot absorb.
-        let sum: f64 = scores.iter().map(|&s| f64::from(s)).sum();
-        let os64 = f64::from(os);
-        let floor = K as f64 * f64::from(f32::from_bits(1));
-        prop_assert!(
-            (sum - os64).abs() <= SUM_REL_TOL * os64 + floor,
-            "{head}: sum {sum} != OS {os} for {x:?}: {scores:?}"
-        );
+        // The sum's tolerance includes one subnormal step per score: below OS ~ 1e-39
+        // each score carries that much rounding, which the relative bound cannot absorb.
+        holds(check_scores(&scores, os, Sum::Equal), || {
+            format!("{head} for {x:?}: {scores:?}")
+        })?;
     }
     // The FastMath backend stays within its documented distance of Libm (for lambdas
     // that are not negligible against the prior; see the `FastMath` docs).
-    #[cfg(feature = "micromath")]
     if t.settings().lambda_map >= 1e-13 {
         let exact = t.map(x, os).unwrap();
         let fast = t.map_with::<mlmap::FastMath>(x, os).unwrap();
@@ -375,21 +381,9 @@ fn out_of_support_is_os_over_k<const K: usize, const BM: usize, const BP: usize>
     os: f32,
 ) -> Result<(), TestCaseError> {
     let x: [f32; K] = std::array::from_fn(|c| outside(t, c, picks[c].0, picks[c].1));
-    let want = os / K as f32;
     for (head, scores) in heads(t, &x, os) {
         let scores = scores.map_err(|e| TestCaseError::fail(format!("{head}: {e:?}")))?;
-        for (i, &s) in scores.iter().enumerate() {
-            prop_assert_eq!(
-                s.to_bits(),
-                want.to_bits(),
-                "{} score {} = {} is not OS/K = {} for {:?}",
-                head,
-                i,
-                s,
-                want,
-                x
-            );
-        }
+        holds(check_unknown(&scores, os), || format!("{head} for {x:?}"))?;
     }
     Ok(())
 }
@@ -414,10 +408,9 @@ fn ml_score_follows_likelihood<const K: usize, const BM: usize, const BP: usize>
         std::mem::swap(&mut xa, &mut xb);
     }
     let (sa, sb) = (t.ml(&xa, os).unwrap().0[i], t.ml(&xb, os).unwrap().0[i]);
-    prop_assert!(
-        sb >= sa,
-        "L {la} / {lb}: score {sb} < {sa} for {xa:?} / {xb:?}"
-    );
+    holds(check_monotone(i, sa, sb), || {
+        format!("L {la} / {lb} for {xa:?} / {xb:?}")
+    })?;
     if la == lb {
         prop_assert_eq!(sa.to_bits(), sb.to_bits());
     }
@@ -477,12 +470,9 @@ fn raised_bin_never_lowers_score<const K: usize, const BM: usize, const BP: usiz
     } else {
         (t.map(&x, os).unwrap(), t2.map(&x, os).unwrap())
     };
-    prop_assert!(
-        after.0[i] >= before.0[i],
-        "class {i}, bin {k} raised by {moved}: {} < {} for {x:?}",
-        after.0[i],
-        before.0[i]
-    );
+    holds(check_monotone(i, before.0[i], after.0[i]), || {
+        format!("bin {k} raised by {moved} for {x:?}")
+    })?;
     let (same_before, same_after) = if ml_head {
         (t.map(&x, os).unwrap(), t2.map(&x, os).unwrap())
     } else {
@@ -510,10 +500,9 @@ fn evidence_never_lowers_score<const K: usize, const BM: usize, const BP: usize>
         ("MAP", t.map(x, os), t.map(&none, os)),
     ] {
         let (with, without) = (with.unwrap().0[i], without.unwrap().0[i]);
-        prop_assert!(
-            with >= without,
-            "{head}: class {i} with likelihood {with} < without {without}: {x:?} / {none:?}"
-        );
+        holds(check_monotone(i, without, with), || {
+            format!("{head}: likelihood raised from 0, {none:?} -> {x:?}")
+        })?;
     }
     Ok(())
 }
@@ -542,8 +531,11 @@ fn bad_inputs_are_errors<const K: usize, const BM: usize, const BP: usize>(
             let want = InferError::NanLogit {
                 class: first as u16,
             };
+            prop_assert_eq!(expected_error(&with_nan, good_os), Some(want));
             for (head, got) in heads(t, &with_nan, good_os) {
-                prop_assert_eq!(got, Err(want), "{}", head);
+                holds(check_error(&with_nan, good_os, got.err()), || {
+                    format!("{head} for {with_nan:?}, OS {good_os}")
+                })?;
             }
             let mut out = [[-7.0f32; K]; 2];
             let rows = [*x, with_nan];
@@ -566,14 +558,20 @@ fn bad_inputs_are_errors<const K: usize, const BM: usize, const BP: usize>(
         None => {
             // Valid inputs: scores, and none of them NaN.
             for (head, got) in heads(t, x, good_os) {
+                holds(check_error(x, good_os, got.err()), || {
+                    format!("{head} for {x:?}, OS {good_os}")
+                })?;
                 let got = got.map_err(|e| TestCaseError::fail(format!("{head}: {e:?}")))?;
                 prop_assert!(got.iter().all(|s| !s.is_nan()), "{}: {:?}", head, got);
             }
         }
     }
     prop_assert!(!(0.0..=1.0).contains(&bad_os));
+    prop_assert_eq!(expected_error(x, bad_os), Some(InferError::Objectness));
     for (head, got) in heads(t, x, bad_os) {
-        prop_assert_eq!(got, Err(InferError::Objectness), "{} OS {}", head, bad_os);
+        holds(check_error(x, bad_os, got.err()), || {
+            format!("{head} for {x:?}, OS {bad_os}")
+        })?;
     }
     Ok(())
 }
@@ -596,57 +594,7 @@ fn bad_objectness() -> impl Strategy<Value = f32> {
 fn assert_table_invariants<const K: usize, const BM: usize, const BP: usize>(
     t: &Table<K, BM, BP>,
 ) -> Result<(), TestCaseError> {
-    let s = t.settings();
-    for lambda in [s.lambda_ml, s.lambda_map] {
-        prop_assert!(
-            lambda > 0.0 && lambda <= mlmap::MAX_LAMBDA,
-            "lambda {}",
-            lambda
-        );
-    }
-    let mut names = Vec::new();
-    for c in 0..K {
-        let name = t.class_name(c).expect("K names");
-        prop_assert!(!name.is_empty() && name.len() <= mlmap::NAME_MAX && name != "background");
-        prop_assert!(!names.contains(&name), "duplicate name {}", name);
-        names.push(name);
-        let g = t.prior(c).unwrap();
-        prop_assert!(g.mean().is_finite(), "mean {}", g.mean());
-        prop_assert!(
-            g.variance().is_finite() && g.variance() > 0.0,
-            "variance {}",
-            g.variance()
-        );
-        let ml = t.ml_histogram(c).unwrap();
-        let map = t.map_histogram(c).unwrap();
-        let hists = [
-            (
-                (0..=BM).map(|k| ml.edge(k)).collect::<Vec<_>>(),
-                ml.frequencies(),
-                BM,
-            ),
-            (
-                (0..=BP).map(|k| map.edge(k)).collect::<Vec<_>>(),
-                map.frequencies(),
-                BP,
-            ),
-        ];
-        for (edges, freqs, bins) in hists {
-            prop_assert_eq!(freqs.len(), bins);
-            prop_assert!(edges.iter().all(|e| e.is_finite()), "edges {:?}", edges);
-            prop_assert!(edges.windows(2).all(|w| w[0] < w[1]), "edges {:?}", edges);
-            prop_assert!(
-                freqs.iter().all(|f| f.is_finite() && *f >= 0.0),
-                "{:?}",
-                freqs
-            );
-            // Summed in f64; allow the f32 summation's own rounding on top of the 1e-4.
-            let sum: f64 = freqs.iter().map(|&f| f64::from(f)).sum();
-            let tol = f64::from(mlmap::FREQUENCY_SUM_TOLERANCE) + bins as f64 * 1.2e-7;
-            prop_assert!((sum - 1.0).abs() <= tol, "frequency sum {}", sum);
-        }
-    }
-    Ok(())
+    holds(check_table(t), || format!("{t:?}"))
 }
 
 /// Invariant 5: decoding `bytes` either fails or yields a table that satisfies every

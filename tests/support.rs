@@ -14,9 +14,6 @@ use mlmap::{ClassSpec, EdgeMode, InferError, Settings, Table, UpperTail};
 /// with the default `Libm` backend and the float64 reference.
 pub const GOLDEN_ABS_TOL: f64 = 1e-6;
 
-/// Relative tolerance on `sum_i s_i = OS` (DESIGN §1.3, invariant 1).
-pub const SUM_REL_TOL: f64 = 1e-5;
-
 /// Shape of the hand-checkable table: 3 classes, 4 ML bins, 2 MAP bins.
 pub type Small = Table<3, 4, 2>;
 /// Shape of the shipped table `tables/default.mlmap`.

@@ -11,7 +11,8 @@ mod layer;
 /// corruption and truncation rejected, one error per broken invariant, size bounds.
 mod format;
 
-/// One proptest property per invariant of DESIGN §1.3, on random tables of four shapes.
+/// One proptest property per invariant of DESIGN §1.3, on random tables of four shapes,
+/// checked by the `mlmap::invariants` checkers that the fuzz targets share.
 mod invariants;
 
 /// Reading CSV files and NPY directories: valid inputs and every malformed case (DESIGN §2).

@@ -1,0 +1,115 @@
+use std::path::Path;
+
+use super::*;
+
+/// Runs `apply --table TABLE --input INPUT -o OUTPUT` in `dir` and reads the output.
+fn apply(dir: &Path, table: &str, input: &str, output: &str) -> (Vec<String>, Vec<Vec<String>>) {
+    ok(dir, &apply_args(table, input, output));
+    read_csv(&dir.join(output))
+}
+
+/// `prefix` (the carried-through columns), then [`score_columns`].
+fn columns(prefix: &[&str]) -> Vec<String> {
+    let mut want: Vec<String> = prefix.iter().map(|c| c.to_string()).collect();
+    want.extend(score_columns());
+    want
+}
+
+#[test]
+fn apply_writes_the_design_columns_and_the_layer_scores() {
+    let dir = tempdir();
+    let d = dir.path();
+    let table_path = golden_table();
+    let table = read_table(Path::new(&table_path));
+    let input = data("val");
+    ok(
+        d,
+        &[
+            "apply",
+            "--table",
+            &table_path,
+            "--input",
+            &input,
+            "--output",
+            "out.csv",
+        ],
+    );
+    let (header, records) = read_csv(&d.join("out.csv"));
+    assert_eq!(header, columns(&["id", "label"]));
+    let rows = rows_of(Path::new(&input));
+    check_scores(&table, &rows, &header, &records);
+    // id and label are carried through as written.
+    let mut src = csv::Reader::from_path(&input).unwrap();
+    for (rec, orig) in records.iter().zip(src.records()) {
+        let orig = orig.unwrap();
+        assert_eq!((&rec[0][..], &rec[1][..]), (&orig[0], &orig[1]));
+    }
+}
+
+#[test]
+fn apply_omits_id_and_label_when_the_input_has_none() {
+    let dir = tempdir();
+    let d = dir.path();
+    let table_path = golden_table();
+    let table = read_table(Path::new(&table_path));
+    write(
+        d,
+        "plain.csv",
+        "objectness,car,cyclist,pedestrian\n0.9,4.1,-2.3,-1.7\n1,-30,40,0\n0,1,2,3\n",
+    );
+    write(
+        d,
+        "labelled.csv",
+        "label,car,cyclist,pedestrian\ncar,4.1,-2.3,-1.7\n,1,2,3\nbackground,0,0,0\n",
+    );
+    let (header, records) = apply(d, &table_path, "plain.csv", "a.csv");
+    assert_eq!(header, score_columns());
+    check_scores(&table, &rows_of(&d.join("plain.csv")), &header, &records);
+
+    let (header, records) = apply(d, &table_path, "labelled.csv", "b.csv");
+    assert_eq!(header, columns(&["label"]));
+    let labels: Vec<&str> = records.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(labels, ["car", "", "background"]);
+    check_scores(&table, &rows_of(&d.join("labelled.csv")), &header, &records);
+
+    // A header without rows gives a header without rows.
+    write(d, "none.csv", "car,cyclist,pedestrian\n");
+    let (header, records) = apply(d, &table_path, "none.csv", "c.csv");
+    assert_eq!(header, score_columns());
+    assert!(records.is_empty());
+}
+
+#[test]
+fn apply_reads_npy_directories() {
+    let dir = tempdir();
+    let d = dir.path();
+    let table_path = golden_table();
+    let table = read_table(Path::new(&table_path));
+
+    // numpy-written, with labels and objectness.
+    let npy = repo("tests/fixtures/npy_small");
+    let (header, records) = apply(d, &table_path, &npy.to_string_lossy(), "a.csv");
+    assert_eq!(header, columns(&["label"]));
+    let labels: Vec<&str> = records.iter().map(|r| r[0].as_str()).collect();
+    assert_eq!(
+        labels,
+        ["car", "background", "cyclist", "pedestrian", "car"]
+    );
+    check_scores(&table, &rows_of(&npy), &header, &records);
+
+    // npyz-written, logits only (float64), classes named.
+    let only = d.join("logits_only");
+    std::fs::create_dir(&only).unwrap();
+    write_npy(
+        &only.join("logits.npy"),
+        &[3, 3],
+        &[4.1f64, -2.3, -1.7, -1.0, 2.5, 0.5, 100.0, 100.0, 100.0],
+    );
+    write(&only, "classes.txt", "car\ncyclist\npedestrian\n");
+    let (header, records) = apply(d, &table_path, "logits_only", "b.csv");
+    assert_eq!(header, score_columns());
+    check_scores(&table, &rows_of(&only), &header, &records);
+    // Logits outside every histogram: the "I don't know" answer, 1/3 each.
+    let third: f32 = records[2][0].parse().unwrap();
+    assert!((third - 1.0 / 3.0).abs() < 1e-6);
+}
