@@ -541,8 +541,9 @@ fn check_scores(table: &DynTable, rows: &[DataRow], records: &[Vec<String>], ski
         let want: Vec<f32> = ml.iter().chain(&map).copied().collect();
         let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&got), bits(&want), "{rec:?}");
-        assert_eq!(rec[skip + 6], CLASSES[mlmap::argmax(&ml)]);
-        assert_eq!(rec[skip + 7], CLASSES[mlmap::argmax(&map)]);
+        // Ties of the top score go to the larger logit (DESIGN §1.7).
+        assert_eq!(rec[skip + 6], CLASSES[mlmap::decide(&ml, &row.logits)]);
+        assert_eq!(rec[skip + 7], CLASSES[mlmap::decide(&map, &row.logits)]);
     }
 }
 
@@ -704,7 +705,7 @@ fn apply_reads_npy_directories() {
 // eval
 // ---------------------------------------------------------------------------------------
 
-const METRIC_KEYS: [&str; 12] = [
+const METRIC_KEYS: [&str; 13] = [
     "ece",
     "mce",
     "nll",
@@ -714,6 +715,7 @@ const METRIC_KEYS: [&str; 12] = [
     "fp_mean",
     "fp_var",
     "auroc",
+    "accuracy",
     "ap_car",
     "ap_cyclist",
     "ap_pedestrian",

@@ -199,19 +199,20 @@ pub fn candidates(
         );
         let _ = writeln!(
             s,
-            "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9}",
-            "rank", "bins", "lambda", "ece", "nll", "brier"
+            "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9} {:>9}",
+            "rank", "bins", "lambda", "ece", "nll", "brier", "accuracy"
         );
         for (i, c) in cands.iter().take(top).enumerate() {
             let _ = writeln!(
                 s,
-                "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9}",
+                "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9} {:>9}",
                 i + 1,
                 c.bins,
                 c.lambda,
                 fmt_opt(c.ece),
                 fmt_opt(c.nll),
-                fmt_opt(c.brier)
+                fmt_opt(c.brier),
+                fmt_opt(c.accuracy)
             );
         }
     }
@@ -240,6 +241,7 @@ pub fn candidates_json(
                     "ece": c.ece,
                     "nll": c.nll,
                     "brier": c.brier,
+                    "accuracy": c.accuracy,
                 })
             })
             .collect()

@@ -1,5 +1,6 @@
 //! Running sums: compensated summation, and the [`Accumulator`] of the metrics that
-//! can be computed in one pass without storing scores (`ece`, `mce`, `nll`, `brier`).
+//! can be computed in one pass without storing scores (`ece`, `mce`, `nll`, `brier`,
+//! `accuracy`).
 
 use std::vec::Vec;
 
@@ -51,7 +52,7 @@ pub(super) fn mean_var(values: impl Iterator<Item = f64> + Clone) -> Option<(f64
 /// Which metrics an [`Accumulator`] keeps (each costs time per row).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Parts {
-    /// `ece` and `mce`: the decision and the confidence bin of every row.
+    /// `ece`, `mce` and `accuracy`: the decision and the confidence bin of every row.
     pub calibration: bool,
     /// `nll`: a logarithm per labelled row.
     pub nll: bool,
@@ -68,8 +69,8 @@ impl Parts {
     };
 }
 
-/// One pass over the rows of one method: the sums behind `ece`, `mce`, `nll` and
-/// `brier` (DESIGN §1.5), without storing scores. The tuner scores each candidate with
+/// One pass over the rows of one method: the sums behind `ece`, `mce`, `nll`,
+/// `brier` and `accuracy` (DESIGN §1.5), without storing scores. The tuner scores each candidate with
 /// one, and [`evaluate`](super::evaluate) computes those metrics with one.
 ///
 /// Rows are not checked: give scores in `[0, 1]` and labels below `K` (as
@@ -86,6 +87,7 @@ impl Parts {
 /// assert_eq!(acc.rows(), 2);
 /// let brier = (0.01 + 0.01 + 0.09 + 0.36) / 2.0;
 /// assert!((acc.brier().unwrap() - brier).abs() < 1e-7);
+/// assert_eq!(acc.accuracy(), Some(1.0));
 /// # Ok::<(), mlmap::host::metrics::MetricsError>(())
 /// ```
 #[derive(Debug, Clone)]
@@ -95,6 +97,8 @@ pub struct Accumulator {
     nll: Option<(Sum, usize)>,
     brier: Option<Sum>,
     rows: usize,
+    labelled: usize,
+    correct: usize,
 }
 
 impl Accumulator {
@@ -117,6 +121,8 @@ impl Accumulator {
             nll: parts.nll.then(|| (Sum::default(), 0)),
             brier: parts.brier.then(Sum::default),
             rows: 0,
+            labelled: 0,
+            correct: 0,
         })
     }
 
@@ -139,7 +145,9 @@ impl Accumulator {
         o: Option<&Outcome>,
     ) {
         self.rows += 1;
+        self.labelled += usize::from(label.is_some());
         if let (Some(bins), Some(o)) = (&mut self.bins, o) {
+            self.correct += usize::from(o.correct);
             if let Some(b) = bins.get_mut(self.edges.bin(o.conf)) {
                 b.count += 1;
                 b.correct += usize::from(o.correct);
@@ -167,9 +175,16 @@ impl Accumulator {
         self.rows
     }
 
-    /// Rows added with a class label (counted only when `nll` is kept).
+    /// Rows added with a class label.
     pub fn labelled(&self) -> usize {
-        self.nll.map_or(0, |(_, n)| n)
+        self.labelled
+    }
+
+    /// `accuracy`, the fraction of labelled rows whose decision is their label
+    /// (DESIGN §1.5, §1.7); `None` unless calibration is kept or without a labelled row.
+    pub fn accuracy(&self) -> Option<f64> {
+        self.bins.as_ref()?;
+        (self.labelled > 0).then(|| self.correct as f64 / self.labelled as f64)
     }
 
     /// The reliability bins, `ece` and `mce`; `None` unless calibration is kept.

@@ -8,7 +8,8 @@
 //! * `ece`, `mce`: the calibration gap over equal-width confidence bins, with the bin
 //!   convention a parameter ([`Binning`]).
 //! * `nll`, `brier`, the mean and population variance of `conf` over true and false
-//!   positives, `auroc` (true against false positives), `ap_<class>` as
+//!   positives, `auroc` (true against false positives), `accuracy` (the fraction of
+//!   labelled rows that are correct), `ap_<class>` as
 //!   `sklearn.metrics.average_precision_score`, and `ood_mean`, `ood_over_0_9` on an
 //!   out-of-distribution set.
 //!
@@ -166,6 +167,9 @@ pub struct Metrics {
     /// `auroc`: probability that a true positive's `conf` exceeds a false positive's,
     /// ties counting 1/2; `None` without both.
     pub auroc: Option<f64>,
+    /// `accuracy`: fraction of the labelled rows whose [`decision`] is their label;
+    /// `None` without any.
+    pub accuracy: Option<f64>,
     /// `ap_<class>`, in class order: average precision of the class's score with its
     /// labelled rows as positives; `None` for a class without positives.
     pub ap: Vec<Option<f64>>,
@@ -186,8 +190,8 @@ pub struct Metrics {
 
 impl Metrics {
     /// The keys of [`Metrics::entries`] that come before the `ap_<class>` ones.
-    pub const LEADING_KEYS: [&'static str; 9] = [
-        "ece", "mce", "nll", "brier", "tp_mean", "tp_var", "fp_mean", "fp_var", "auroc",
+    pub const LEADING_KEYS: [&'static str; 10] = [
+        "ece", "mce", "nll", "brier", "tp_mean", "tp_var", "fp_mean", "fp_var", "auroc", "accuracy",
     ];
 
     /// Attaches the metrics of an out-of-distribution set.
@@ -213,6 +217,7 @@ impl Metrics {
             self.fp_mean,
             self.fp_var,
             self.auroc,
+            self.accuracy,
         ];
         let mut out: Vec<(String, Option<f64>)> = Self::LEADING_KEYS
             .iter()
@@ -289,7 +294,8 @@ pub fn reliability(outcomes: &[Outcome], cfg: &MetricsConfig) -> Result<Reliabil
 /// let m = evaluate(&scores, 2, &labels, &MetricsConfig::default())?;
 /// assert_eq!((m.tp, m.fp), (1, 2));
 /// assert_eq!(m.auroc, Some(1.0));
-/// assert_eq!(m.entries(&["car", "person"])[9].0, "ap_car");
+/// assert_eq!(m.accuracy, Some(0.5));
+/// assert_eq!(m.entries(&["car", "person"])[10].0, "ap_car");
 /// # Ok::<(), mlmap::host::metrics::MetricsError>(())
 /// ```
 ///
@@ -355,6 +361,7 @@ pub fn evaluate_with_logits(
         fp_mean: fp_stats.map(|s| s.0),
         fp_var: fp_stats.map(|s| s.1),
         auroc: auroc(&outcomes),
+        accuracy: acc.accuracy(),
         ap: (0..k)
             .map(|c| average_precision(&pr_points(scores, k, labels, c)))
             .collect(),
@@ -402,6 +409,25 @@ mod tests {
     }
 
     #[test]
+    fn ties_are_decided_by_the_logits() {
+        // Row 0 scores OS / K for both classes (no histogram knew its logits) and is
+        // labelled 1, whose logit is the larger: correct with the logits, wrong without.
+        let scores = [0.25, 0.25, 0.9, 0.1];
+        let logits = [-3.0, 2.0, 1.0, 0.0];
+        let labels = [Some(1), Some(0)];
+        let c = MetricsConfig::default();
+        let plain = evaluate(&scores, 2, &labels, &c).unwrap();
+        assert_eq!((plain.tp, plain.accuracy), (1, Some(0.5)));
+        let decided = evaluate_with_logits(&scores, &logits, 2, &labels, &c).unwrap();
+        assert_eq!((decided.tp, decided.accuracy), (2, Some(1.0)));
+        assert_eq!((decided.fp_mean, decided.tp_mean), (None, Some(0.575)));
+        assert_eq!(
+            evaluate_with_logits(&scores, &logits[..3], 2, &labels, &c),
+            Err(MetricsError::Shape)
+        );
+    }
+
+    #[test]
     fn ece_by_hand() {
         // Rows: conf 0.95 correct, 0.95 wrong, 0.25 wrong, 0.0 (background).
         let scores = [0.95, 0.05, 0.95, 0.0, 0.25, 0.2, 0.0, 0.0];
@@ -416,6 +442,7 @@ mod tests {
         );
         assert!((m.mce - 0.45).abs() < 1e-15);
         assert_eq!((m.rows, m.labelled, m.tp, m.fp), (4, 3, 1, 3));
+        assert_eq!(m.accuracy, Some(1.0 / 3.0));
         assert_eq!(m.reliability.len(), 10);
         assert_eq!(m.reliability[0].count, 1);
         assert_eq!(m.reliability[1].accuracy, None);
@@ -430,8 +457,8 @@ mod tests {
         let scores = [0.2, 0.7, 0.5, 0.5];
         let m = evaluate(&scores, 2, &[None, None], &MetricsConfig::default()).unwrap();
         assert_eq!(
-            (m.nll, m.tp_mean, m.tp_var, m.auroc),
-            (None, None, None, None)
+            (m.nll, m.tp_mean, m.tp_var, m.auroc, m.accuracy),
+            (None, None, None, None, None)
         );
         assert_eq!(m.ap, [None, None]);
         assert!(m.fp_mean.is_some());
@@ -448,6 +475,7 @@ mod tests {
                 "fp_mean",
                 "fp_var",
                 "auroc",
+                "accuracy",
                 "ap_a",
                 "ap_class1"
             ]

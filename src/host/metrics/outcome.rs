@@ -16,11 +16,13 @@ pub struct Outcome {
     pub correct: bool,
 }
 
-/// The predicted class of a row from its scores and its logits: the index of the
-/// largest score, the lowest index on ties.
+/// The predicted class of a row from its scores and its logits (DESIGN §1.7): the
+/// index of the largest score; a tie of the largest scores goes to the larger logit
+/// among the tied classes, then to the lowest index (as [`crate::decide`]).
 ///
 /// Every decision of the host (metrics, plots, the tuner, `apply`'s `*_pred`) is made
-/// here. `logits` are the row's logits in class order (empty when unknown).
+/// here. `logits` are the row's logits in class order; without them (empty) ties go to
+/// the lowest index.
 ///
 /// # Examples
 ///
@@ -28,6 +30,9 @@ pub struct Outcome {
 /// use mlmap::host::metrics::decision;
 ///
 /// assert_eq!(decision(&[0.2, 0.7, 0.1], &[0.0, 1.0, -1.0]), 1);
+/// // Every histogram said "I don't know": OS / K each, the logits decide.
+/// assert_eq!(decision(&[0.25, 0.25, 0.25], &[-1.0, 3.0, 2.0]), 1);
+/// assert_eq!(decision::<f64, f64>(&[0.25, 0.25], &[]), 0);
 /// assert_eq!(decision::<f64, f64>(&[], &[]), 0);
 /// ```
 pub fn decision<S, L>(scores: &[S], logits: &[L]) -> usize
@@ -35,14 +40,7 @@ where
     S: Copy + PartialOrd,
     L: Copy + PartialOrd,
 {
-    let _ = logits;
-    let mut best: Option<(usize, S)> = None;
-    for (i, &s) in scores.iter().enumerate() {
-        if best.is_none_or(|(_, b)| s > b) {
-            best = Some((i, s));
-        }
-    }
-    best.map_or(0, |(i, _)| i)
+    crate::decide(scores, logits)
 }
 
 /// The [`Outcome`] of one row (not checked; see [`outcomes`]).
@@ -110,7 +108,8 @@ pub(super) fn logit_rows(logits: &[f64], k: usize, n: usize) -> impl Iterator<It
 }
 
 /// The [`Outcome`] of every row: `conf`, predicted class, correctness, deciding
-/// without logits (the lowest index on ties); see [`outcomes_with_logits`].
+/// without logits (ties of the largest score go to the lowest index); see
+/// [`outcomes_with_logits`].
 ///
 /// # Errors
 ///
@@ -161,7 +160,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn confidence_is_the_max_and_ties_go_to_the_lowest_index() {
+    fn confidence_is_the_max_and_ties_go_to_the_larger_logit() {
         let scores = [0.2, 0.7, 0.1, 0.4, 0.4, 0.2, 0.3, 0.3, 0.3];
         let labels = [Some(1), Some(1), None];
         let o = outcomes(&scores, 3, &labels).unwrap();
@@ -169,7 +168,16 @@ mod tests {
         let correct: Vec<bool> = o.iter().map(|o| o.correct).collect();
         assert_eq!(conf, [0.7, 0.4, 0.3]);
         assert_eq!(correct, [true, false, false]);
-        assert_eq!(decision(&[0.5f32, 0.5], &[0.0f32, 1.0]), 0);
+        // Without logits the lowest index; with them the larger logit (row 1: 0.4 ties
+        // between classes 0 and 1, logit 2 > 1; row 2: a three-way tie, logit 5 wins).
+        let logits = [0.0, 1.0, 0.0, 1.0, 2.0, 9.0, 4.0, 5.0, 3.0];
+        let o = outcomes_with_logits(&scores, &logits, 3, &labels).unwrap();
+        let pred: Vec<usize> = o.iter().map(|o| o.pred).collect();
+        assert_eq!(pred, [1, 1, 1]);
+        assert!(o[1].correct);
+        assert_eq!(o[1].conf, 0.4);
+        assert_eq!(decision(&[0.5f32, 0.5], &[0.0f32, 1.0]), 1);
+        assert_eq!(decision(&[0.5f32, 0.5], &[1.0f32, 1.0]), 0);
         assert_eq!(
             outcomes_with_logits(&scores, &[0.0; 3], 3, &labels),
             Err(MetricsError::Shape)

@@ -93,6 +93,8 @@ pub struct Candidate {
     pub nll: Option<f64>,
     /// Mean Brier score; for the best candidates only.
     pub brier: Option<f64>,
+    /// Top-1 accuracy of the labelled rows (DESIGN §1.5); for the best candidates only.
+    pub accuracy: Option<f64>,
 }
 
 /// Why a search could not run.
@@ -209,7 +211,7 @@ fn evidence_into(
 }
 
 /// Scores one lambda over every row given the evidence: the objective alone, or all
-/// three metrics with `all`.
+/// metrics (`ece`, `nll`, `brier`, `accuracy`) with `all`.
 fn score(
     val: &ValRows<'_>,
     evidence: &[f32],
@@ -234,6 +236,7 @@ fn score(
             ece: None,
             nll: None,
             brier: None,
+            accuracy: None,
         };
     };
     let rows = evidence
@@ -259,6 +262,7 @@ fn score(
         ece,
         nll,
         brier,
+        accuracy: acc.accuracy(),
     }
 }
 
@@ -300,7 +304,7 @@ impl TuneResult {
 /// | `bins` | the bin counts to try, per head (each head is searched on its own) |
 /// | `lambdas` | the smoothing values to try (every head) |
 /// | `objective` | what to minimise |
-/// | `detail` | how many of the best candidates per head get all three metrics |
+/// | `detail` | how many of the best candidates per head get every metric |
 #[derive(Debug, Clone, Copy)]
 pub struct SearchParams<'a> {
     /// Validation rows.
@@ -315,7 +319,7 @@ pub struct SearchParams<'a> {
     pub lambdas: &'a [f32],
     /// What to minimise.
     pub objective: Objective,
-    /// How many of the best candidates per head get all three metrics.
+    /// How many of the best candidates per head get every metric.
     pub detail: usize,
 }
 
@@ -333,7 +337,7 @@ impl SearchParams<'_> {
 ///
 /// `histograms(b)` returns the K fitted histograms with `b` bins (called once per
 /// distinct bin count). Every candidate gets its objective; the best `p.detail` of
-/// each head also get all three metrics. The bin counts are shared among the
+/// each head also get every metric of [`Candidate`]. The bin counts are shared among the
 /// machine's cores. `progress(done, total)` is called as bin counts complete.
 ///
 /// # Errors
@@ -434,7 +438,7 @@ where
             return Err(TuneError::Histogram("a search thread failed".into()));
         }
         h.candidates.sort_by(order);
-        // All three metrics for the best candidates.
+        // Every metric for the best candidates.
         for c in h.candidates.iter_mut().take(p.detail) {
             if let Some((_, hists)) = work.iter().find(|(b, _)| *b == c.bins) {
                 evidence_into(val, hists, &pdf, p.tail, h.head, &mut evidence);

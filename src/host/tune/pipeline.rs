@@ -21,7 +21,7 @@ use crate::{EdgeMode, Gaussian, Head, Histogram, Settings, UpperTail};
 /// | `lambdas` | smoothing values to try (e.g. from [`lambda_grid`](super::lambda_grid)) |
 /// | `objective` | what to minimise on the validation set |
 /// | `edges`, `tail` | the fit's edge placement and tail policy |
-/// | `detail` | how many of the best candidates per head get all three metrics |
+/// | `detail` | how many of the best candidates per head get every metric |
 #[derive(Debug, Clone, PartialEq)]
 pub struct TuneParams {
     /// Bin counts to try, per head.
@@ -34,7 +34,7 @@ pub struct TuneParams {
     pub edges: EdgeMode,
     /// Likelihood above the last edge.
     pub tail: UpperTail,
-    /// How many of the best candidates per head get all three metrics.
+    /// How many of the best candidates per head get every metric.
     pub detail: usize,
 }
 
