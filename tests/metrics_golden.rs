@@ -101,8 +101,13 @@ fn metrics_match_reference() {
             .collect();
         let bins = case["bins"].as_u64().unwrap() as usize;
         let exp = &case["expected"];
+        // Cases with logits decide tied top scores by them (DESIGN §1.7).
+        let logits = match &case["logits"] {
+            Value::Null => Vec::new(),
+            v => matrix(v).0,
+        };
 
-        let outcomes = metrics::outcomes(&scores, k, &labels).unwrap();
+        let outcomes = metrics::outcomes_with_logits(&scores, &logits, k, &labels).unwrap();
         let conf = vector(&exp["conf"]);
         let correct: Vec<bool> = exp["correct"]
             .as_array()
@@ -117,7 +122,7 @@ fn metrics_match_reference() {
 
         for binning in Binning::ALL {
             let cfg = MetricsConfig { bins, binning };
-            let m = metrics::evaluate(&scores, k, &labels, &cfg).unwrap();
+            let m = metrics::evaluate_with_logits(&scores, &logits, k, &labels, &cfg).unwrap();
             let want = &exp["bins"][binning.name()];
             let what = format!("{name} / {binning}");
             assert_close(m.ece, num(&want["ece"]), REL, &format!("{what}: ece"));
@@ -140,6 +145,7 @@ fn metrics_match_reference() {
                 ("fp_mean", m.fp_mean),
                 ("fp_var", m.fp_var),
                 ("auroc", m.auroc),
+                ("accuracy", m.accuracy),
             ] {
                 assert_opt(got, &exp[key], &format!("{name}: {key}"));
             }

@@ -31,3 +31,8 @@ mod metrics_golden;
 // bad-input case (exit code, message naming the file and line, no output left behind).
 #[cfg(feature = "cli")]
 mod cli;
+
+/// Decisions on ties through the binary: `OS / K` rows go to the class with the largest
+/// logit in `apply`'s `*_pred` and in `eval`'s `accuracy` (DESIGN §1.7).
+#[cfg(feature = "cli")]
+mod cli_decisions;

@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Independent reference values for mlmap's host metrics and baselines.
 
-Written from docs/DESIGN.md §1.4-§1.5 with numpy, scipy and scikit-learn only; it shares no
+Written from docs/DESIGN.md §1.4-§1.5 and §1.7 with numpy, scipy and scikit-learn only; it shares no
 code with the Rust crate, so agreement between the two is evidence for both. It builds
 small adversarial cases (ties in conf, empty ECE bins, confidences exactly on the bin
 edges 0.1 .. 1.0, conf 0 and 1, background rows, a class without positives, a single
-row) and one larger random case, computes every metric, and writes inputs and expected
+row, tied top scores decided by the logits) and one larger random case, computes every metric, and writes inputs and expected
 outputs to tests/golden/metrics/, read by tests/metrics_golden.rs.
 
 Regenerate (from the repository root):
@@ -160,9 +160,28 @@ def calibration(conf, correct, m):
 # The other metrics.
 
 
-def argmax_lowest(scores):
-    # numpy.argmax returns the first maximum: the lowest index on ties.
-    return np.argmax(scores, axis=1)
+def decide(scores, logits):
+    """DESIGN §1.7: the class of the largest score; among classes whose scores tie at the
+    top, the one with the largest logit; the lowest index if those tie too (or without
+    logits). numpy.argmax returns the first maximum: the lowest index on ties."""
+    top = scores == scores.max(axis=1, keepdims=True)
+    if logits is None:
+        return np.argmax(top, axis=1)
+    assert np.isfinite(logits).all()
+    return np.argmax(np.where(top, logits, -np.inf), axis=1)
+
+
+def decide_loop(scores, logits):
+    """The same rule, row by row in plain Python (a second implementation)."""
+    out = []
+    for r, row in enumerate(scores):
+        best = max(row)
+        tied = [i for i, v in enumerate(row) if v == best]
+        if logits is not None:
+            top = max(logits[r][i] for i in tied)
+            tied = [i for i in tied if logits[r][i] == top]
+        out.append(tied[0])
+    return np.array(out, dtype=int)
 
 
 def auroc_pairs(conf_tp, conf_fp):
@@ -190,11 +209,13 @@ def ap_stepwise(y, s):
     return ap
 
 
-def metrics(scores, labels, k, m):
+def metrics(scores, labels, k, m, logits=None):
     n = scores.shape[0]
     lab = np.array([-1 if l is None else l for l in labels])
     conf = scores.max(axis=1)
-    pred = argmax_lowest(scores)
+    pred = decide(scores, logits)
+    assert (pred == decide_loop(scores, logits)).all()
+    assert (conf == scores[np.arange(n), pred]).all()
     correct = (lab >= 0) & (pred == lab)
     out = {"conf": conf.tolist(), "correct": correct.tolist(), "bins": calibration(conf, correct, m)}
 
@@ -246,6 +267,14 @@ def metrics(scores, labels, k, m):
         close(ap, ap_stepwise(yc, scores[:, c]), 1e-12, "ap")
         aps.append(ap)
     out["ap"] = aps
+
+    labelled = lab >= 0
+    if labelled.any():
+        acc = float(np.mean(pred[labelled] == lab[labelled]))
+        close(acc, correct.sum() / labelled.sum(), 1e-15, "accuracy")
+        out["accuracy"] = acc
+    else:
+        out["accuracy"] = None
     return out
 
 
@@ -327,6 +356,29 @@ def ties_case():
     return "ties", np.array(rows), labels, ["a", "b"], 10
 
 
+def tied_logits_case():
+    """The ties case with logits (DESIGN §1.7): row 2 ties at 0.5 and goes to class 1
+    (logit 1 > 0), row 6 ties at 0.3 and goes to class 1 (0.9 > 0.2)."""
+    _, scores, labels, classes, m = ties_case()
+    logits = np.array([[2.0, 1.0], [3.0, 1.0], [0.0, 1.0], [5.0, -1.0], [1.0, 1.0], [-1.0, 2.0],
+                       [0.2, 0.9]])
+    return "tied_logits", scores, labels, classes, m, logits
+
+
+def unknown_rows_case():
+    """Rows that every histogram calls "I don't know": OS / K for every class, so the
+    logits alone decide; some rows tie in the logits too (lowest index)."""
+    rng = np.random.default_rng(17)
+    n, k = 60, 3
+    os_ = np.round(rng.uniform(0.3, 1.0, size=n), 2)
+    scores = np.repeat((os_ / k)[:, None], k, axis=1)
+    scores[:20] = softmax_rows(rng.normal(size=(20, k)) * 2.0) * os_[:20, None]
+    logits = np.round(rng.normal(size=(n, k)) * 3.0, 0)
+    lab = rng.integers(-1, k, size=n)
+    labels = [None if v < 0 else int(v) for v in lab]
+    return "unknown_rows", scores, labels, ["car", "cyclist", "pedestrian"], 10, logits
+
+
 def empty_bins_case():
     rows = [[0.05, 0.01], [0.95, 0.02], [0.95, 0.0], [0.04, 0.05], [0.96, 0.01]]
     labels = [0, 0, 1, 1, None]
@@ -367,7 +419,9 @@ def large_case():
     scores[tie] = np.round(scores[tie], 2)
     lab = rng.integers(-1, k, size=n)
     labels = [None if v < 0 else int(v) for v in lab]
-    return "large_random", scores, labels, ["car", "cyclist", "pedestrian"], 10
+    # Logits that decide the tied rows: the detector's ranking, rounded to tie at times.
+    decided = np.round(logits + rng.normal(size=(n, k)) * 0.1, 1)
+    return "large_random", scores, labels, ["car", "cyclist", "pedestrian"], 10, decided
 
 
 def classifier_case():
@@ -382,6 +436,8 @@ def metric_cases():
     cases = [
         edge_case(),
         ties_case(),
+        tied_logits_case(),
+        unknown_rows_case(),
         empty_bins_case(),
         missing_class_case(),
         zero_one_case(),
@@ -393,9 +449,10 @@ def metric_cases():
         ("all_background", np.array([[0.9, 0.1], [0.2, 0.3]]), [None, None], ["a", "b"], 10),
     ]
     out = []
-    for name, scores, labels, classes, m in cases:
+    for name, scores, labels, classes, m, *rest in cases:
+        logits = rest[0] if rest else None
         assert ((scores >= 0) & (scores <= 1)).all(), name
-        exp = metrics(scores, labels, len(classes), m)
+        exp = metrics(scores, labels, len(classes), m, logits)
         if name == "classifier":
             assert exp.get("log_loss_checked"), "log_loss cross-check did not run"
         exp.pop("log_loss_checked", None)
@@ -405,6 +462,7 @@ def metric_cases():
             "bins": m,
             "scores": scores.tolist(),
             "labels": labels,
+            **({} if logits is None else {"logits": logits.tolist()}),
             "expected": exp,
         })
     return out

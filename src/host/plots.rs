@@ -33,9 +33,8 @@ use std::vec;
 use std::vec::Vec;
 
 use self::draw::{class_color, method_color, Colour, LikelihoodPanel};
-use self::stats::{
-    column, confidence_and_correct, ece, ece_label, pr_curve, reliability_bins, PrCurve, ScoreHist,
-};
+use self::stats::{ece_label, pr_curve, PrCurve, ScoreHist};
+use crate::host::metrics::{self, MetricsConfig, MetricsError, Outcome};
 use crate::host::DynTable;
 use crate::Histogram;
 
@@ -110,49 +109,39 @@ impl std::error::Error for PlotError {
 /// diagonal, the gap to the bin's mean confidence shaded, the ECE in the title, and the
 /// rows per bin in a lower panel.
 ///
-/// `conf[i]` is the confidence of row `i` (its largest score) and `correct[i]` whether
-/// it is a true positive (DESIGN §1.5). The `bins` bins are `((m-1)/M, m/M]` with the
-/// edges computed in `f64` as `m / M`, confidence 0 (and below) in the first bin and
-/// above 1 in the last, as the default ECE of DESIGN §1.5; the title shows
+/// `outcomes` are the rows' confidences and correctness (DESIGN §1.5, from
+/// [`metrics::outcomes_with_logits`]); the bins and the ECE are those of
+/// [`metrics::reliability`] with `cfg` (bin count and convention). The title shows
 /// `ECE = ` with four decimals, or `n/a` without rows.
 ///
 /// # Errors
 ///
-/// [`PlotError::Input`] when the slices differ in length, `bins` is 0 or a confidence is
+/// [`PlotError::Input`] when the number of bins is 0 or too large or a confidence is
 /// not finite; [`PlotError::Io`] when `dir` or the file cannot be written.
 pub fn reliability_diagram(
     dir: &Path,
     method: &str,
-    conf: &[f64],
-    correct: &[bool],
-    bins: usize,
+    outcomes: &[Outcome],
+    cfg: &MetricsConfig,
 ) -> Result<Vec<PathBuf>, PlotError> {
     let path = dir.join(format!("reliability_{}.svg", file_stem(method)));
-    if conf.len() != correct.len() {
-        return Err(input(
-            &path,
-            format!(
-                "{} confidences but {} correctness flags",
-                conf.len(),
-                correct.len()
-            ),
-        ));
-    }
-    if bins == 0 {
+    if cfg.bins == 0 {
         return Err(input(
             &path,
             "the reliability diagram needs at least one bin",
         ));
     }
-    check_finite(&path, "confidence", conf)?;
+    if let Some(i) = outcomes.iter().position(|o| !o.conf.is_finite()) {
+        return Err(input(&path, format!("confidence {i} is not finite")));
+    }
+    let rel = metrics::reliability(outcomes, cfg).map_err(|e| input(&path, e.to_string()))?;
     ensure_dir(dir)?;
-    let stats = reliability_bins(conf, correct, bins);
     let title = format!(
         "Reliability: {method} ({}, n = {})",
-        ece_label(ece(&stats)),
-        conf.len()
+        ece_label(rel.ece),
+        outcomes.len()
     );
-    let svg = draw::reliability_svg(&path, &title, &stats, method_color(method))?;
+    let svg = draw::reliability_svg(&path, &title, &rel.bins, method_color(method))?;
     write_atomic(&path, &svg)?;
     Ok(vec![path])
 }
@@ -211,15 +200,15 @@ pub fn pr_curves<S: AsRef<str>>(
     let path = dir.join(format!("pr_{}.svg", file_stem(method)));
     let k = class_names.len();
     check_matrix(&path, k, scores, labels)?;
-    ensure_dir(dir)?;
-    let curves: Vec<(String, Colour, PrCurve)> = class_names
+    let curves = class_names
         .iter()
         .enumerate()
         .map(|(c, name)| {
-            let curve = pr_curve(column(scores, k, c), labels, c);
-            (name.as_ref().to_string(), class_color(c), curve)
+            let curve = class_curve(&path, scores, k, labels, c)?;
+            Ok((name.as_ref().to_string(), class_color(c), curve))
         })
-        .collect();
+        .collect::<Result<Vec<(String, Colour, PrCurve)>, PlotError>>()?;
+    ensure_dir(dir)?;
     let title = format!("Precision-recall per class: {method}");
     let svg = draw::pr_svg(&path, &title, &curves)?;
     write_atomic(&path, &svg)?;
@@ -261,13 +250,13 @@ pub fn pr_by_class<S: AsRef<str>>(
     for (c, (name, stem)) in class_names.iter().zip(&stems).enumerate() {
         let name = name.as_ref();
         let path = dir.join(format!("{stem}.svg"));
-        let curves: Vec<(String, Colour, PrCurve)> = methods
+        let curves = methods
             .iter()
             .map(|(method, scores)| {
-                let curve = pr_curve(column(scores, k, c), labels, c);
-                ((*method).to_string(), method_color(method), curve)
+                let curve = class_curve(&path, scores, k, labels, c)?;
+                Ok(((*method).to_string(), method_color(method), curve))
             })
-            .collect();
+            .collect::<Result<Vec<(String, Colour, PrCurve)>, PlotError>>()?;
         let positives = labels.iter().filter(|l| **l == Some(c)).count();
         let title = format!(
             "Precision-recall: {name} ({positives} positives of {} rows)",
@@ -335,46 +324,59 @@ pub fn fitted_histograms(dir: &Path, table: &DynTable) -> Result<Vec<PathBuf>, P
     Ok(written)
 }
 
+/// The scores of every method on one labelled set, as [`plot_all`] takes them.
+#[derive(Debug, Clone, Copy)]
+pub struct Scored<'a, S> {
+    /// Class names; `K` is their number.
+    pub class_names: &'a [S],
+    /// Each method's name and `N x K` row-major final scores.
+    pub methods: &'a [(&'a str, &'a [f64])],
+    /// The `N` labels (`None` for background).
+    pub labels: &'a [Option<usize>],
+    /// The `N x K` logits that decide ties (DESIGN §1.7), or empty.
+    pub logits: &'a [f64],
+}
+
 /// Writes every plot of an evaluation into `dir` and returns the paths written.
 ///
-/// For each method of `methods` (name, N x K row-major final scores): its
-/// [`reliability_diagram`] with `bins` bins, its [`tp_fp_histograms`] and its
-/// [`pr_curves`]; then [`pr_by_class`] over all methods and, when a table is given,
-/// [`fitted_histograms`]. Confidence and correctness follow DESIGN §1.5: `conf` is the
-/// largest score of a row, and a row is a true positive when its label is a class and
-/// its argmax (lowest index on ties) equals it.
+/// For each method of `set.methods`: its [`reliability_diagram`] binned as `cfg`
+/// says, its [`tp_fp_histograms`] and its [`pr_curves`]; then [`pr_by_class`] over all
+/// methods and, when a table is given, [`fitted_histograms`]. Confidence and
+/// correctness are those of the metrics ([`metrics::outcomes_with_logits`]).
 ///
 /// # Errors
 ///
 /// The first error of the functions above; the files written before it stay.
 pub fn plot_all<S: AsRef<str>>(
     dir: &Path,
-    class_names: &[S],
-    methods: &[(&str, &[f64])],
-    labels: &[Option<usize>],
-    bins: usize,
+    set: &Scored<'_, S>,
+    cfg: &MetricsConfig,
     table: Option<&DynTable>,
 ) -> Result<Vec<PathBuf>, PlotError> {
-    let k = class_names.len();
+    let k = set.class_names.len();
     let mut written = Vec::new();
-    for (method, scores) in methods {
+    for (method, scores) in set.methods {
         let path = dir.join(format!("reliability_{}.svg", file_stem(method)));
-        check_matrix(&path, k, scores, labels)?;
-        let (conf, correct) = confidence_and_correct(scores, k, labels);
-        written.extend(reliability_diagram(dir, method, &conf, &correct, bins)?);
+        check_matrix(&path, k, scores, set.labels)?;
+        let outcomes = match metrics::outcomes_with_logits(scores, set.logits, k, set.labels) {
+            Ok(outcomes) => outcomes,
+            Err(MetricsError::Empty) => Vec::new(),
+            Err(e) => return Err(input(&path, e.to_string())),
+        };
+        written.extend(reliability_diagram(dir, method, &outcomes, cfg)?);
         let (mut tp, mut fp) = (Vec::new(), Vec::new());
-        for (&c, &ok) in conf.iter().zip(&correct) {
-            if ok {
-                tp.push(c)
+        for o in &outcomes {
+            if o.correct {
+                tp.push(o.conf)
             } else {
-                fp.push(c)
+                fp.push(o.conf)
             }
         }
         written.extend(tp_fp_histograms(dir, method, &tp, &fp)?);
-        written.extend(pr_curves(dir, method, class_names, scores, labels)?);
+        written.extend(pr_curves(dir, method, set.class_names, scores, set.labels)?);
     }
-    if !methods.is_empty() {
-        written.extend(pr_by_class(dir, class_names, methods, labels)?);
+    if !set.methods.is_empty() {
+        written.extend(pr_by_class(dir, set.class_names, set.methods, set.labels)?);
     }
     if let Some(table) = table {
         written.extend(fitted_histograms(dir, table)?);
@@ -398,6 +400,22 @@ fn check_finite(path: &Path, what: &str, values: &[f64]) -> Result<(), PlotError
         Some(i) => Err(input(path, format!("{what} {i} is not finite"))),
         None => Ok(()),
     }
+}
+
+/// The drawn precision-recall curve of class `c` (scores checked by [`check_matrix`]).
+fn class_curve(
+    path: &Path,
+    scores: &[f64],
+    k: usize,
+    labels: &[Option<usize>],
+    c: usize,
+) -> Result<PrCurve, PlotError> {
+    let points = match metrics::precision_recall_curve(scores, k, labels, c) {
+        Ok(points) => points,
+        Err(MetricsError::Empty) => Vec::new(),
+        Err(e) => return Err(input(path, e.to_string())),
+    };
+    Ok(pr_curve(&points))
 }
 
 /// Checks an N x K score matrix and its N labels.
@@ -513,341 +531,4 @@ fn write_atomic(path: &Path, contents: &str) -> Result<(), PlotError> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::{ClassSpec, EdgeMode, Settings, UpperTail};
-
-    fn tmp() -> tempfile::TempDir {
-        tempfile::tempdir().unwrap()
-    }
-
-    fn read(path: &Path) -> String {
-        fs::read_to_string(path).unwrap()
-    }
-
-    fn assert_svg(path: &Path) -> String {
-        let svg = read(path);
-        assert!(
-            svg.starts_with("<svg"),
-            "{}: {}",
-            path.display(),
-            &svg[..40]
-        );
-        assert!(svg.trim_end().ends_with("</svg>"), "{}", path.display());
-        svg
-    }
-
-    fn no_temporaries(dir: &Path) {
-        for entry in fs::read_dir(dir).unwrap() {
-            let name = entry.unwrap().file_name();
-            assert!(
-                !name.to_string_lossy().ends_with(".tmp"),
-                "{name:?} left behind"
-            );
-        }
-    }
-
-    /// A directory that cannot be created even by root: its parent is a file.
-    fn unwritable(base: &Path) -> PathBuf {
-        let file = base.join("a_file");
-        fs::write(&file, b"x").unwrap();
-        file.join("plots")
-    }
-
-    fn assert_names_path(err: &PlotError, path: &Path) {
-        assert!(err.path().starts_with(path) || path.starts_with(err.path()));
-        let msg = err.to_string();
-        assert!(msg.contains(&path.display().to_string()), "{msg}");
-    }
-
-    fn table() -> DynTable {
-        let settings = Settings {
-            lambda_ml: 0.0055,
-            lambda_map: 0.00012,
-            edge_mode: EdgeMode::Linspace,
-            upper_tail: UpperTail::Zero,
-        };
-        let spec = |name, mean, ml: Vec<f32>, map: Vec<f32>| ClassSpec {
-            name,
-            rows: 100,
-            mean,
-            variance: 1.5,
-            ml_range: (mean - 3.0, mean + 3.0),
-            ml_freqs: ml,
-            map_range: (mean - 2.5, mean + 2.5),
-            map_freqs: map,
-        };
-        DynTable::new(
-            settings,
-            vec![
-                spec(
-                    "car",
-                    4.0,
-                    vec![0.1, 0.2, 0.4, 0.2, 0.1],
-                    vec![0.25, 0.5, 0.25],
-                ),
-                spec(
-                    "cyclist",
-                    -1.0,
-                    vec![0.2, 0.2, 0.2, 0.2, 0.2],
-                    vec![0.5, 0.25, 0.25],
-                ),
-                spec(
-                    "pedestrian",
-                    0.5,
-                    vec![0.0, 0.1, 0.3, 0.5, 0.1],
-                    vec![0.2, 0.3, 0.5],
-                ),
-            ],
-        )
-        .unwrap()
-    }
-
-    #[test]
-    fn file_stems_are_safe() {
-        assert_eq!(file_stem("ml"), "ml");
-        assert_eq!(file_stem("a/b c"), "a_b_c");
-        assert_eq!(file_stem("..x"), "_.x");
-        assert_eq!(file_stem(""), "unnamed");
-        let stems = class_stems(&["car", "ml", "a b", "a_b"], ["ml", "map"].into_iter());
-        assert_eq!(stems, ["pr_car", "pr_class_ml", "pr_a_b", "pr_a_b_3"]);
-    }
-
-    #[test]
-    fn reliability_diagram_shows_the_ece() {
-        let dir = tmp();
-        // Bin (0.9, 1]: acc 0.5, conf 0.95; bin (0.5, 0.6]: acc 1, conf 0.6.
-        // ECE = 0.5 * 0.45 + 0.5 * 0.4 = 0.425.
-        let conf = [0.95, 0.95, 0.6, 0.6];
-        let correct = [true, false, true, true];
-        let stats = reliability_bins(&conf, &correct, 10);
-        let e = ece(&stats).unwrap();
-        assert!((e - 0.425).abs() < 1e-12, "{e}");
-        let paths = reliability_diagram(dir.path(), "ml", &conf, &correct, 10).unwrap();
-        assert_eq!(paths, [dir.path().join("reliability_ml.svg")]);
-        let svg = assert_svg(&paths[0]);
-        assert!(svg.contains("ECE = 0.4250"), "{svg}");
-        assert!(svg.contains("Reliability: ml"));
-        assert!(svg.contains("perfect calibration"));
-        no_temporaries(dir.path());
-    }
-
-    #[test]
-    fn reliability_diagram_handles_empty_and_refuses_bad_input() {
-        let dir = tmp();
-        let paths = reliability_diagram(dir.path(), "map", &[], &[], 10).unwrap();
-        assert!(assert_svg(&paths[0]).contains("ECE = n/a"));
-
-        let err = reliability_diagram(dir.path(), "map", &[0.5], &[], 10).unwrap_err();
-        assert!(matches!(err, PlotError::Input { .. }));
-        assert_names_path(&err, &dir.path().join("reliability_map.svg"));
-        let err = reliability_diagram(dir.path(), "map", &[0.5], &[true], 0).unwrap_err();
-        assert!(matches!(err, PlotError::Input { .. }));
-        let err = reliability_diagram(dir.path(), "map", &[f64::NAN], &[true], 10).unwrap_err();
-        assert!(err.to_string().contains("not finite"), "{err}");
-    }
-
-    #[test]
-    fn score_histograms_have_means_in_the_legend() {
-        let dir = tmp();
-        let paths =
-            tp_fp_histograms(dir.path(), "softmax", &[0.9, 0.8, 0.85], &[0.99, 0.2]).unwrap();
-        assert_eq!(paths, [dir.path().join("scores_softmax.svg")]);
-        let svg = assert_svg(&paths[0]);
-        assert!(svg.contains("mean = 0.850"), "{svg}");
-        assert!(svg.contains("mean = 0.595"), "{svg}");
-        assert!(svg.contains("true positives (n = 3)"));
-        assert!(svg.contains("false positives (n = 2)"));
-
-        for (tp, fp) in [
-            (&[][..], &[0.3][..]),
-            (&[0.3][..], &[][..]),
-            (&[][..], &[][..]),
-        ] {
-            let paths = tp_fp_histograms(dir.path(), "softmax", tp, fp).unwrap();
-            let svg = assert_svg(&paths[0]);
-            assert!(svg.contains("mean = n/a") && svg.contains("(n = 0)"));
-        }
-        no_temporaries(dir.path());
-    }
-
-    #[test]
-    fn pr_curves_name_every_class_and_its_ap() {
-        let dir = tmp();
-        let names = ["car".to_string(), "cyclist".into(), "pedestrian".into()];
-        // Four rows; nobody is a pedestrian.
-        let scores = [
-            0.8, 0.1, 0.1, //
-            0.35, 0.6, 0.05, //
-            0.4, 0.3, 0.3, //
-            0.1, 0.2, 0.7,
-        ];
-        let labels = [Some(0), Some(1), None, Some(0)];
-        let paths = pr_curves(dir.path(), "ml", &names, &scores, &labels).unwrap();
-        assert_eq!(paths, [dir.path().join("pr_ml.svg")]);
-        let svg = assert_svg(&paths[0]);
-        // car: scores 0.8+, 0.4-, 0.35-, 0.1+ -> AP = 0.5 * 1 + 0.5 * 0.5 = 0.75.
-        assert!(svg.contains("car (AP = 0.7500)"), "{svg}");
-        assert!(svg.contains("cyclist (AP = 1.0000)"), "{svg}");
-        assert!(svg.contains("pedestrian (no positives)"), "{svg}");
-    }
-
-    #[test]
-    fn pr_by_class_overlays_the_methods() {
-        let dir = tmp();
-        let names = ["car", "ml"];
-        let a = [0.9, 0.1, 0.2, 0.8, 0.6, 0.4];
-        let b = [0.6, 0.4, 0.5, 0.5, 0.5, 0.5];
-        let labels = [Some(0), Some(1), None];
-        let methods: [(&str, &[f64]); 2] = [("ml", &a), ("map", &b)];
-        let paths = pr_by_class(dir.path(), &names, &methods, &labels).unwrap();
-        assert_eq!(
-            paths,
-            [
-                dir.path().join("pr_car.svg"),
-                dir.path().join("pr_class_ml.svg")
-            ]
-        );
-        let svg = assert_svg(&paths[0]);
-        assert!(svg.contains("ml (AP = 1.0000)") && svg.contains("map (AP = "));
-        assert!(svg.contains("Precision-recall: car (1 positives of 3 rows)"));
-
-        let bad: [(&str, &[f64]); 1] = [("map", &a[..5])];
-        let err = pr_by_class(dir.path(), &names, &bad, &labels).unwrap_err();
-        assert!(err.to_string().contains("method map"), "{err}");
-        let err = pr_curves(dir.path(), "ml", &names, &a, &[Some(2), None, None]).unwrap_err();
-        assert!(err.to_string().contains("label 2 of row 0"), "{err}");
-    }
-
-    #[test]
-    fn fitted_histograms_draw_both_heads() {
-        let dir = tmp();
-        let paths = fitted_histograms(dir.path(), &table()).unwrap();
-        assert_eq!(
-            paths,
-            [
-                dir.path().join("likelihood_ml.svg"),
-                dir.path().join("likelihood_map.svg")
-            ]
-        );
-        let ml = assert_svg(&paths[0]);
-        assert!(ml.contains("ML head") && ml.contains("λ = 0.0055") && ml.contains("5 bins"));
-        let map = assert_svg(&paths[1]);
-        assert!(map.contains("MAP head") && map.contains("λ = 0.00012"));
-        for svg in [&ml, &map] {
-            for name in ["car", "cyclist", "pedestrian", "prior density", "frequency"] {
-                assert!(svg.contains(name), "{name}");
-            }
-        }
-        no_temporaries(dir.path());
-    }
-
-    #[test]
-    fn plot_all_writes_every_file() {
-        let dir = tmp();
-        let names = ["car", "cyclist", "pedestrian"];
-        let ml = [0.7, 0.2, 0.1, 0.3, 0.3, 0.3, 0.1, 0.1, 0.8];
-        let sm = [0.9, 0.05, 0.05, 0.1, 0.8, 0.1, 0.2, 0.2, 0.6];
-        let labels = [Some(0), None, Some(2)];
-        let methods: [(&str, &[f64]); 2] = [("ml", &ml), ("softmax", &sm)];
-        let out = dir.path().join("nested").join("plots");
-        let paths = plot_all(&out, &names, &methods, &labels, 10, Some(&table())).unwrap();
-        let mut files: Vec<String> = paths
-            .iter()
-            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
-            .collect();
-        files.sort();
-        let want = [
-            "likelihood_map.svg",
-            "likelihood_ml.svg",
-            "pr_car.svg",
-            "pr_cyclist.svg",
-            "pr_ml.svg",
-            "pr_pedestrian.svg",
-            "pr_softmax.svg",
-            "reliability_ml.svg",
-            "reliability_softmax.svg",
-            "scores_ml.svg",
-            "scores_softmax.svg",
-        ];
-        assert_eq!(files, want);
-        for p in &paths {
-            assert_svg(p);
-        }
-        no_temporaries(&out);
-        assert!(plot_all(&out, &names, &[], &labels, 10, None)
-            .unwrap()
-            .is_empty());
-    }
-
-    #[test]
-    fn an_unwritable_directory_is_refused_with_its_path() {
-        let base = tmp();
-        let dir = unwritable(base.path());
-        let errs = [
-            reliability_diagram(&dir, "ml", &[0.5], &[true], 10).unwrap_err(),
-            tp_fp_histograms(&dir, "ml", &[0.5], &[0.4]).unwrap_err(),
-            pr_curves(&dir, "ml", &["a", "b"], &[0.5, 0.5], &[Some(0)]).unwrap_err(),
-            pr_by_class(&dir, &["a", "b"], &[("ml", &[0.5, 0.5][..])], &[Some(0)]).unwrap_err(),
-            fitted_histograms(&dir, &table()).unwrap_err(),
-        ];
-        for err in &errs {
-            assert!(matches!(err, PlotError::Io { .. }), "{err}");
-            assert_names_path(err, &dir);
-            assert!(std::error::Error::source(err).is_some());
-        }
-    }
-
-    #[test]
-    fn a_file_in_the_way_is_refused_with_its_path() {
-        // The directory exists but the plot's name is taken by a directory.
-        let dir = tmp();
-        let target = dir.path().join("scores_ml.svg");
-        fs::create_dir(&target).unwrap();
-        let err = tp_fp_histograms(dir.path(), "ml", &[0.5], &[]).unwrap_err();
-        assert!(matches!(err, PlotError::Io { .. }), "{err}");
-        assert_eq!(err.path(), target);
-        no_temporaries(dir.path());
-    }
-
-    #[test]
-    fn fitted_histograms_lay_out_more_classes_and_a_floored_prior() {
-        let settings = *table().settings();
-        let spec = |name, variance| ClassSpec {
-            name,
-            rows: 10,
-            mean: 1.0,
-            variance,
-            ml_range: (0.5, 1.5),
-            ml_freqs: vec![0.5, 0.5],
-            map_range: (0.5, 1.5),
-            map_freqs: vec![1.0],
-        };
-        let classes = ["a", "b", "c", "d", "e"]
-            .into_iter()
-            .map(|n| spec(n, 1.0))
-            .chain([spec("constant", 1e-12)])
-            .collect();
-        let t = DynTable::new(settings, classes).unwrap();
-        let dir = tmp();
-        let paths = fitted_histograms(dir.path(), &t).unwrap();
-        let svg = assert_svg(&paths[0]);
-        assert!(
-            svg.contains("constant (n = 10)") && svg.contains("1.00e-12"),
-            "{svg}"
-        );
-    }
-
-    #[test]
-    fn a_class_without_positives_is_named_in_every_legend() {
-        let dir = tmp();
-        let scores = [0.9, 0.1, 0.6, 0.4];
-        let labels = [Some(0), None];
-        let methods: [(&str, &[f64]); 2] = [("sigmoid", &scores), ("temperature", &scores)];
-        let paths = pr_by_class(dir.path(), &["car", "cyclist"], &methods, &labels).unwrap();
-        let svg = assert_svg(&paths[1]);
-        assert!(svg.contains("sigmoid (no positives)"));
-        assert!(svg.contains("temperature (no positives)"));
-        assert!(svg.contains("0 positives of 2 rows"));
-    }
-}
+mod tests;

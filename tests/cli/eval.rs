@@ -6,7 +6,7 @@ use mlmap::host::metrics::{self, MetricsConfig};
 use super::*;
 
 /// The metric keys of every method (DESIGN §1.5), without the out-of-distribution ones.
-const METRIC_KEYS: [&str; 12] = [
+const METRIC_KEYS: [&str; 13] = [
     "ece",
     "mce",
     "nll",
@@ -16,6 +16,7 @@ const METRIC_KEYS: [&str; 12] = [
     "fp_mean",
     "fp_var",
     "auroc",
+    "accuracy",
     "ap_car",
     "ap_cyclist",
     "ap_pedestrian",

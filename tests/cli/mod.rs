@@ -409,7 +409,9 @@ fn check_scores(table: &DynTable, rows: &[DataRow], header: &[String], records: 
             let got: Vec<f32> = cols.iter().map(|&i| rec[i].parse().unwrap()).collect();
             let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&got), bits(&want), "{}: {rec:?}", head.name);
-            assert_eq!(rec[pred], CLASSES[mlmap::argmax(&want)], "{rec:?}");
+            // Ties of the top score go to the larger logit (DESIGN §1.7).
+            let decided = mlmap::decide(&want, &row.logits);
+            assert_eq!(rec[pred], CLASSES[decided], "{rec:?}");
         }
     }
 }

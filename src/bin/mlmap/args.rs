@@ -2,7 +2,21 @@
 
 use std::path::PathBuf;
 
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use mlmap::host::metrics::Binning;
+use mlmap::host::names::Named;
+use mlmap::host::tune::Objective;
+use mlmap::{EdgeMode, UpperTail};
+
+/// The parser of a flag taking one of the values of a [`Named`] set: the possible
+/// values, their descriptions and the parsing all come from the set's table.
+fn named<T: Named + Clone + Send + Sync>() -> impl TypedValueParser<Value = T> {
+    let values = T::NAMES
+        .iter()
+        .map(|n| PossibleValue::new(n.flag).help(n.help));
+    PossibleValuesParser::new(values).try_map(|s| T::from_name(&s))
+}
 
 /// Fit, tune, apply and evaluate ML/MAP tables for object detectors.
 #[derive(Debug, Parser)]
@@ -28,24 +42,6 @@ pub enum Command {
     Inspect(InspectArgs),
     /// Run the whole job on the data shipped in examples/data.
     Demo(DemoArgs),
-}
-
-/// How the fit places the bin edges.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Edges {
-    /// B equal bins over [min, max] of the training logits (numpy.histogram).
-    Linspace,
-    /// The edges MATLAB's histogram(x, nbins) picks (the paper's tables).
-    Matlab,
-}
-
-/// Likelihood above the last edge.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Tail {
-    /// No likelihood above the training support (the paper's behaviour).
-    Zero,
-    /// Logits above the last edge use the last bin.
-    Clamp,
 }
 
 /// Flags of `fit`.
@@ -77,11 +73,11 @@ pub struct FitArgs {
     )]
     pub lambda_map: f32,
     /// Edge placement.
-    #[arg(long, value_enum, default_value_t = Edges::Linspace)]
-    pub edges: Edges,
+    #[arg(long, value_parser = named::<EdgeMode>(), default_value = EdgeMode::Linspace.flag())]
+    pub edges: EdgeMode,
     /// Likelihood above the last edge.
-    #[arg(long, value_enum, default_value_t = Tail::Zero)]
-    pub upper_tail: Tail,
+    #[arg(long, value_parser = named::<UpperTail>(), default_value = UpperTail::Zero.flag())]
+    pub upper_tail: UpperTail,
     /// Bins per logit of the Bayes head.
     #[arg(long, default_value_t = 22, value_name = "N")]
     pub bins_bayes: usize,
@@ -99,17 +95,6 @@ pub struct FitArgs {
     /// The table file to write.
     #[arg(long, short, value_name = "TABLE")]
     pub output: PathBuf,
-}
-
-/// What `tune` minimises on the validation set.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Objective {
-    /// Expected calibration error (10 bins, DESIGN §1.5).
-    Ece,
-    /// Negative log-likelihood of the labelled rows.
-    Nll,
-    /// Brier score over all rows.
-    Brier,
 }
 
 /// Output format of `tune`.
@@ -131,7 +116,7 @@ pub struct TuneArgs {
     #[arg(long, value_name = "FILE")]
     pub val: PathBuf,
     /// What to minimise.
-    #[arg(long, value_enum, default_value_t = Objective::Ece)]
+    #[arg(long, value_parser = named::<Objective>(), default_value = Objective::Ece.flag())]
     pub objective: Objective,
     /// ML bin counts to try: `N`, `A..B` (inclusive) or `A,B,C`.
     #[arg(long, default_value = "4..40", value_name = "SET")]
@@ -159,11 +144,11 @@ pub struct TuneArgs {
     #[arg(long, default_value_t = 3, value_name = "N")]
     pub lambdas_per_decade: usize,
     /// Edge placement.
-    #[arg(long, value_enum, default_value_t = Edges::Linspace)]
-    pub edges: Edges,
+    #[arg(long, value_parser = named::<EdgeMode>(), default_value = EdgeMode::Linspace.flag())]
+    pub edges: EdgeMode,
     /// Likelihood above the last edge.
-    #[arg(long, value_enum, default_value_t = Tail::Zero)]
-    pub upper_tail: Tail,
+    #[arg(long, value_parser = named::<UpperTail>(), default_value = UpperTail::Zero.flag())]
+    pub upper_tail: UpperTail,
     /// How many of the best candidates to print per head.
     #[arg(long, default_value_t = 5, value_name = "N")]
     pub top: usize,
@@ -200,17 +185,6 @@ pub enum Format {
     Markdown,
 }
 
-/// Bin closure of the ECE.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Binning {
-    /// `((m-1)/M, m/M]`, conf = 0 in the first bin (DESIGN §1.5).
-    Default,
-    /// `[lo, hi)` bins, as netcal.
-    Netcal,
-    /// `[lo, hi)` bins with conf = 1 in an extra bin, as torchmetrics.
-    Torchmetrics,
-}
-
 /// Flags of `eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
@@ -236,7 +210,7 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 10, value_name = "M")]
     pub ece_bins: usize,
     /// ECE bin closure convention.
-    #[arg(long, value_enum, default_value_t = Binning::Default)]
+    #[arg(long, value_parser = named::<Binning>(), default_value = Binning::Design.flag())]
     pub ece_binning: Binning,
 }
 

@@ -3,6 +3,10 @@
 use std::fmt;
 use std::path::Path;
 
+use mlmap::host::dataset::DataError;
+use mlmap::host::fit::FitError;
+use mlmap::host::{fit_message, HostError};
+
 /// Why a command failed, and whose fault it is.
 #[derive(Debug)]
 pub enum CliError {
@@ -42,3 +46,41 @@ impl fmt::Display for CliError {
 
 /// Result of a command.
 pub type Result<T> = std::result::Result<T, CliError>;
+
+impl From<HostError> for CliError {
+    fn from(e: HostError) -> Self {
+        match e {
+            HostError::Fit { train, error } => fit_error(&train, error),
+            e if e.is_bad_input() => Self::Input(e.to_string()),
+            e => Self::Internal(e.to_string()),
+        }
+    }
+}
+
+impl From<DataError> for CliError {
+    fn from(e: DataError) -> Self {
+        HostError::from(e).into()
+    }
+}
+
+/// Maps an error of fitting on the training data `train` to exit code 2 (bad input)
+/// or 1, naming `train` when the error does not name a file itself, and naming a
+/// parameter by its flag.
+pub fn fit_error(train: &Path, e: FitError) -> CliError {
+    let msg = match &e {
+        FitError::Param {
+            name,
+            value,
+            expected,
+        } => format!(
+            "--{} {value} is out of range: expected {expected}",
+            name.replace('_', "-")
+        ),
+        _ => fit_message(train, &e),
+    };
+    if e.is_bad_input() {
+        CliError::Input(msg)
+    } else {
+        CliError::Internal(msg)
+    }
+}

@@ -16,9 +16,9 @@
 mod args;
 mod cmd;
 mod error;
-mod load;
 mod output;
 mod report;
+mod shared;
 
 use std::process::ExitCode;
 

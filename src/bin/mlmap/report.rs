@@ -1,11 +1,20 @@
-//! Rendering an evaluation: one row per metric, one column per method, as aligned text,
-//! JSON (DESIGN §4 keys) or markdown.
+//! Rendering what the library computed: an evaluation (one row per metric, one column
+//! per method, as aligned text, JSON with the DESIGN §4 keys, or markdown), the
+//! candidates of a search, and a summary of a written table.
 
 use std::fmt::Write as _;
+use std::path::Path;
+
+use mlmap::host::eval::Evaluation;
+use mlmap::host::names::Named;
+use mlmap::host::tune::{Candidate, Objective, TuneResult};
+use mlmap::host::DynTable;
+
+use crate::args::Format;
 
 /// Metrics of one method: `(key, value)` in a stable order; `None` when undefined.
 pub struct MethodReport {
-    /// `sigmoid`, `softmax`, `temperature`, `ml` or `map`.
+    /// The method's name.
     pub method: &'static str,
     /// `(metric key, value)` pairs.
     pub metrics: Vec<(String, Option<f64>)>,
@@ -31,6 +40,8 @@ fn value(r: &MethodReport, key: &str) -> Option<f64> {
         .and_then(|(_, v)| *v)
 }
 
+/// A value in four decimals, in scientific notation when tiny or huge, `-` when
+/// undefined.
 fn fmt_value(v: Option<f64>) -> String {
     match v {
         None => "-".into(),
@@ -39,7 +50,8 @@ fn fmt_value(v: Option<f64>) -> String {
     }
 }
 
-/// Aligned text, metrics as rows; the best value of the calibration metrics is marked.
+/// Aligned text, metrics as rows, values as [`fmt_value`] writes them (no value is
+/// marked).
 pub fn text(reports: &[MethodReport]) -> String {
     let keys = keys(reports);
     let width = keys.iter().map(String::len).max().unwrap_or(6).max(6);
@@ -100,4 +112,183 @@ pub fn json(reports: &[MethodReport], extra: serde_json::Value) -> serde_json::V
         top.extend(extra);
     }
     serde_json::Value::Object(top)
+}
+
+/// The per-method reports of an evaluation.
+fn method_reports(ev: &Evaluation) -> Vec<MethodReport> {
+    ev.methods
+        .iter()
+        .map(|r| MethodReport {
+            method: r.method.name(),
+            metrics: ev.entries(r),
+        })
+        .collect()
+}
+
+/// An evaluation in `format`.
+pub fn evaluation(ev: &Evaluation, format: Format) -> String {
+    let reports = method_reports(ev);
+    let config = &ev.config;
+    match format {
+        Format::Text => {
+            let mut s = String::new();
+            let tp = ev.labelled();
+            let _ = writeln!(
+                s,
+                "{} test rows ({} labelled with a class, {} background){}; ECE: {} bins, {} binning",
+                ev.rows,
+                tp,
+                ev.rows - tp,
+                ev.ood_rows.map_or(String::new(), |n| format!(", {n} out-of-distribution rows")),
+                config.bins,
+                config.binning.name(),
+            );
+            if let Some(t) = ev.temperature {
+                let _ = writeln!(
+                    s,
+                    "temperature T = {:.4} (validation NLL {:.4})",
+                    t.t, t.nll
+                );
+            }
+            s.push('\n');
+            s.push_str(&text(&reports));
+            s
+        }
+        Format::Markdown => markdown(&reports),
+        Format::Json => {
+            let extra = serde_json::json!({
+                "rows": ev.rows,
+                "ood_rows": ev.ood_rows,
+                "classes": ev.class_names,
+                "ece_bins": config.bins,
+                "ece_binning": config.binning.name(),
+            });
+            pretty(&json(&reports, extra))
+        }
+    }
+}
+
+/// Pretty JSON with a final newline.
+fn pretty(v: &serde_json::Value) -> String {
+    let mut s = serde_json::to_string_pretty(v).unwrap_or_default();
+    s.push('\n');
+    s
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.5}"))
+}
+
+/// The best `top` candidates of each head as an aligned table; `searched(head)` is the
+/// number of candidates searched.
+pub fn candidates(
+    result: &TuneResult,
+    objective: Objective,
+    top: usize,
+    searched: impl Fn(mlmap::Head) -> usize,
+) -> String {
+    let mut s = String::new();
+    for h in &result.heads {
+        let cands = &h.candidates;
+        let _ = writeln!(
+            s,
+            "{} head: best {} of {} candidates by {objective}",
+            h.head,
+            top.min(cands.len()),
+            searched(h.head),
+        );
+        let _ = writeln!(
+            s,
+            "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9} {:>9}",
+            "rank", "bins", "lambda", "ece", "nll", "brier", "accuracy"
+        );
+        for (i, c) in cands.iter().take(top).enumerate() {
+            let _ = writeln!(
+                s,
+                "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9} {:>9}",
+                i + 1,
+                c.bins,
+                c.lambda,
+                fmt_opt(c.ece),
+                fmt_opt(c.nll),
+                fmt_opt(c.brier),
+                fmt_opt(c.accuracy)
+            );
+        }
+    }
+    s
+}
+
+/// The best `top` candidates of each head as one JSON object, values at full precision.
+pub fn candidates_json(
+    result: &TuneResult,
+    objective: Objective,
+    top: usize,
+    searched: impl Fn(mlmap::Head) -> usize,
+    table_path: &Path,
+    table_bytes: usize,
+) -> String {
+    let head = |cands: &[Candidate]| -> Vec<serde_json::Value> {
+        cands
+            .iter()
+            .take(top)
+            .enumerate()
+            .map(|(i, c)| {
+                serde_json::json!({
+                    "rank": i + 1,
+                    "bins": c.bins,
+                    "lambda": c.lambda,
+                    "ece": c.ece,
+                    "nll": c.nll,
+                    "brier": c.brier,
+                    "accuracy": c.accuracy,
+                })
+            })
+            .collect()
+    };
+    let mut v = serde_json::Map::new();
+    v.insert("objective".into(), objective.name().into());
+    let counts: serde_json::Map<String, serde_json::Value> = result
+        .heads
+        .iter()
+        .map(|h| (h.head.name().to_string(), searched(h.head).into()))
+        .collect();
+    v.insert("candidates".into(), counts.into());
+    for h in &result.heads {
+        v.insert(h.head.name().to_string(), head(&h.candidates).into());
+    }
+    v.insert(
+        "table".into(),
+        serde_json::json!({ "path": table_path.display().to_string(), "bytes": table_bytes }),
+    );
+    pretty(&serde_json::Value::Object(v))
+}
+
+/// A few lines describing a written table.
+pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
+    let st = table.settings();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "wrote {} ({size} bytes): {} classes, edges {}, upper tail {}",
+        path.display(),
+        table.k(),
+        st.edge_mode.name(),
+        st.upper_tail.name()
+    );
+    let _ = writeln!(
+        s,
+        "  ML  {:>3} bins, lambda {:e}\n  MAP {:>3} bins, lambda {:e}",
+        table.bins_ml(),
+        st.lambda_ml,
+        table.bins_map(),
+        st.lambda_map
+    );
+    let rows: Vec<String> = table
+        .class_names()
+        .zip(table.rows())
+        .map(|(n, r)| format!("{n} {r}"))
+        .collect();
+    let _ = writeln!(s, "  training rows: {}", rows.join(", "));
+    s
 }

@@ -10,7 +10,10 @@ use std::vec;
 use std::vec::Vec;
 
 use plotters::backend::SVGBackend;
-use plotters::chart::{ChartBuilder, SeriesLabelPosition};
+use plotters::chart::{ChartBuilder, ChartContext, SeriesLabelPosition, SeriesLabelStyle};
+use plotters::coord::cartesian::Cartesian2d;
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::CoordTranslate;
 use plotters::coord::Shift;
 use plotters::drawing::{DrawingArea, DrawingAreaErrorKind, IntoDrawingArea};
 use plotters::element::{PathElement, Rectangle, Text};
@@ -20,8 +23,9 @@ use plotters::style::{
     Color, IntoFont, RGBColor, ShapeStyle, TextStyle, BLACK, TRANSPARENT, WHITE,
 };
 
-use super::stats::{CalBin, PrCurve, ScoreHist};
+use super::stats::{PrCurve, ScoreHist};
 use super::PlotError;
+use crate::host::metrics::CalibrationBin;
 use crate::{Gaussian, Histogram, Libm};
 
 /// A series colour.
@@ -29,6 +33,23 @@ pub(super) type Colour = RGBColor;
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 type DrawResult = Result<(), DrawingAreaErrorKind<io::Error>>;
+type UnitChart<'a> = ChartContext<'a, SVGBackend<'a>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// The legend box every plot draws: white, framed, at `position`.
+trait LegendBox {
+    fn legend_box(self, position: SeriesLabelPosition, margin: u32, font: u32) -> DrawResult;
+}
+
+impl<'a, 'b, CT: CoordTranslate> LegendBox for SeriesLabelStyle<'a, 'b, SVGBackend<'a>, CT> {
+    fn legend_box(mut self, position: SeriesLabelPosition, margin: u32, font: u32) -> DrawResult {
+        self.position(position)
+            .margin(margin)
+            .label_font(("sans-serif", font))
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .draw()
+    }
+}
 
 /// Renders an SVG document in memory with `draw`.
 ///
@@ -62,7 +83,7 @@ fn render_svg(
 pub(super) fn reliability_svg(
     path: &Path,
     title: &str,
-    stats: &[CalBin],
+    stats: &[CalibrationBin],
     color: RGBColor,
 ) -> Result<String, PlotError> {
     render_svg(path, (760, 820), |root| {
@@ -181,7 +202,12 @@ fn legend_line(color: ShapeStyle) -> impl Fn((i32, i32)) -> PathElement<(i32, i3
     move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color)
 }
 
-fn draw_reliability(root: &Area<'_>, title: &str, stats: &[CalBin], color: RGBColor) -> DrawResult {
+fn draw_reliability(
+    root: &Area<'_>,
+    title: &str,
+    stats: &[CalibrationBin],
+    color: RGBColor,
+) -> DrawResult {
     let body = root.titled(title, ("sans-serif", 24))?;
     let height = body.dim_in_pixel().1 as i32;
     let (top, bottom) = body.split_vertically(height * 3 / 4);
@@ -189,29 +215,17 @@ fn draw_reliability(root: &Area<'_>, title: &str, stats: &[CalBin], color: RGBCo
     let gap = RGBColor(244, 165, 165).filled();
     let gap_edge = RGBColor(180, 30, 30).stroke_width(1);
 
-    let mut chart = ChartBuilder::on(&top)
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..1f64, 0f64..1f64)?;
-    chart
-        .configure_mesh()
-        .x_desc("confidence")
-        .y_desc("accuracy")
-        .x_labels(11)
-        .y_labels(11)
-        .x_label_formatter(&unit_tick)
-        .y_label_formatter(&unit_tick)
-        .light_line_style(TRANSPARENT)
-        .axis_desc_style(("sans-serif", 16))
-        .label_style(("sans-serif", 13))
-        .draw()?;
-    let filled: Vec<&CalBin> = stats.iter().filter(|b| b.count > 0).collect();
+    let mut chart = unit_chart(&top, 12, ("confidence", "accuracy"), 1.0)?;
+    // (lo, hi, accuracy, mean confidence) of the bins holding rows.
+    let filled: Vec<(f64, f64, f64, f64)> = stats
+        .iter()
+        .filter_map(|b| Some((b.lo, b.hi, b.accuracy?, b.confidence?)))
+        .collect();
     chart
         .draw_series(
             filled
                 .iter()
-                .map(|b| Rectangle::new([(b.lo, 0.0), (b.hi, b.acc)], bar)),
+                .map(|&(lo, hi, acc, _)| Rectangle::new([(lo, 0.0), (hi, acc)], bar)),
         )?
         .label("accuracy of the bin")
         .legend(legend_box(bar));
@@ -219,19 +233,19 @@ fn draw_reliability(root: &Area<'_>, title: &str, stats: &[CalBin], color: RGBCo
         .draw_series(
             filled
                 .iter()
-                .map(|b| Rectangle::new([(b.lo, b.acc), (b.hi, b.conf)], gap)),
+                .map(|&(lo, hi, acc, conf)| Rectangle::new([(lo, acc), (hi, conf)], gap)),
         )?
         .label("gap |accuracy - mean confidence|")
         .legend(legend_box(gap));
     chart.draw_series(
         filled
             .iter()
-            .map(|b| Rectangle::new([(b.lo, 0.0), (b.hi, b.acc)], BLACK.stroke_width(1))),
+            .map(|&(lo, hi, acc, _)| Rectangle::new([(lo, 0.0), (hi, acc)], BLACK.stroke_width(1))),
     )?;
     chart.draw_series(
         filled
             .iter()
-            .map(|b| Rectangle::new([(b.lo, b.acc), (b.hi, b.conf)], gap_edge)),
+            .map(|&(lo, hi, acc, conf)| Rectangle::new([(lo, acc), (hi, conf)], gap_edge)),
     )?;
     chart
         .draw_series(DashedLineSeries::new(
@@ -244,12 +258,7 @@ fn draw_reliability(root: &Area<'_>, title: &str, stats: &[CalBin], color: RGBCo
         .legend(legend_line(BLACK.stroke_width(2)));
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .margin(12)
-        .label_font(("sans-serif", 15))
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()?;
+        .legend_box(SeriesLabelPosition::UpperLeft, 12, 15)?;
 
     let max_count = stats.iter().map(|b| b.count).max().unwrap_or(0).max(1) as f64;
     let mut counts = ChartBuilder::on(&bottom)
@@ -258,19 +267,7 @@ fn draw_reliability(root: &Area<'_>, title: &str, stats: &[CalBin], color: RGBCo
         .x_label_area_size(40)
         .y_label_area_size(60)
         .build_cartesian_2d(0f64..1f64, 0f64..max_count * 1.25)?;
-    counts
-        .configure_mesh()
-        .x_desc("confidence")
-        .y_desc("rows")
-        .x_labels(11)
-        .y_labels(4)
-        .x_label_formatter(&unit_tick)
-        .y_label_formatter(&|v| format!("{v:.0}"))
-        .disable_x_mesh()
-        .light_line_style(TRANSPARENT)
-        .axis_desc_style(("sans-serif", 16))
-        .label_style(("sans-serif", 13))
-        .draw()?;
+    draw_mesh(&mut counts, ("confidence", "rows"), Some(4))?;
     counts.draw_series(stats.iter().map(|b| {
         Rectangle::new(
             [(b.lo, 0.0), (b.hi, b.count as f64)],
@@ -299,19 +296,7 @@ fn draw_score_panel(area: &Area<'_>, what: &str, hist: &ScoreHist, bar: ShapeSty
         .x_label_area_size(40)
         .y_label_area_size(60)
         .build_cartesian_2d(0f64..1f64, 0f64..max * 1.15)?;
-    chart
-        .configure_mesh()
-        .x_desc("score (largest of the row)")
-        .y_desc("rows")
-        .x_labels(11)
-        .y_labels(6)
-        .x_label_formatter(&unit_tick)
-        .y_label_formatter(&|v| format!("{v:.0}"))
-        .disable_x_mesh()
-        .light_line_style(TRANSPARENT)
-        .axis_desc_style(("sans-serif", 16))
-        .label_style(("sans-serif", 13))
-        .draw()?;
+    draw_mesh(&mut chart, ("score (largest of the row)", "rows"), Some(6))?;
     let m = hist.counts.len().max(1) as f64;
     chart
         .draw_series(hist.counts.iter().enumerate().map(|(k, &n)| {
@@ -351,35 +336,51 @@ fn draw_score_panel(area: &Area<'_>, what: &str, hist: &ScoreHist, bar: ShapeSty
     } else {
         SeriesLabelPosition::UpperRight
     };
-    chart
-        .configure_series_labels()
-        .position(position)
-        .margin(10)
-        .label_font(("sans-serif", 15))
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()
+    chart.configure_series_labels().legend_box(position, 10, 15)
+}
+
+/// A chart of `[0, 1] x [0, y_max]` with both axes ticked every tenth, its axes
+/// described by `desc` (x, y).
+fn unit_chart<'a>(
+    area: &Area<'a>,
+    margin: u32,
+    desc: (&str, &str),
+    y_max: f64,
+) -> Result<UnitChart<'a>, DrawingAreaErrorKind<io::Error>> {
+    let mut chart = ChartBuilder::on(area)
+        .margin(margin)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..1f64, 0f64..y_max)?;
+    draw_mesh(&mut chart, desc, None)?;
+    Ok(chart)
+}
+
+/// The axes of a chart over `[0, 1]` on x: both ticked every tenth, or with
+/// `counts = Some(n)` whole numbers in `n` ticks on y (and no vertical grid lines).
+fn draw_mesh(chart: &mut UnitChart<'_>, desc: (&str, &str), counts: Option<usize>) -> DrawResult {
+    let count_tick = |v: &f64| format!("{v:.0}");
+    let mut mesh = chart.configure_mesh();
+    mesh.x_desc(desc.0)
+        .y_desc(desc.1)
+        .x_labels(11)
+        .x_label_formatter(&unit_tick)
+        .light_line_style(TRANSPARENT)
+        .axis_desc_style(("sans-serif", 16))
+        .label_style(("sans-serif", 13));
+    match counts {
+        Some(n) => mesh
+            .y_labels(n)
+            .y_label_formatter(&count_tick)
+            .disable_x_mesh()
+            .draw(),
+        None => mesh.y_labels(11).y_label_formatter(&unit_tick).draw(),
+    }
 }
 
 fn draw_pr(root: &Area<'_>, title: &str, curves: &[(String, RGBColor, PrCurve)]) -> DrawResult {
     let body = root.titled(title, ("sans-serif", 22))?;
-    let mut chart = ChartBuilder::on(&body)
-        .margin(14)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..1f64, 0f64..1.02f64)?;
-    chart
-        .configure_mesh()
-        .x_desc("recall")
-        .y_desc("precision")
-        .x_labels(11)
-        .y_labels(11)
-        .x_label_formatter(&unit_tick)
-        .y_label_formatter(&unit_tick)
-        .light_line_style(TRANSPARENT)
-        .axis_desc_style(("sans-serif", 16))
-        .label_style(("sans-serif", 13))
-        .draw()?;
+    let mut chart = unit_chart(&body, 14, ("recall", "precision"), 1.02)?;
     for (name, color, curve) in curves {
         let style = color.stroke_width(2);
         let label = match curve.ap {
@@ -393,12 +394,7 @@ fn draw_pr(root: &Area<'_>, title: &str, curves: &[(String, RGBColor, PrCurve)])
     }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
-        .margin(12)
-        .label_font(("sans-serif", 15))
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()
+        .legend_box(SeriesLabelPosition::LowerLeft, 12, 15)
 }
 
 /// One class of [`fitted_histograms`].
@@ -518,12 +514,7 @@ fn draw_likelihood_panel(area: &Area<'_>, panel: &LikelihoodPanel<'_>) -> DrawRe
         .legend(legend_line(line));
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .margin(8)
-        .label_font(("sans-serif", 13))
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()
+        .legend_box(SeriesLabelPosition::UpperRight, 8, 13)
 }
 
 #[cfg(test)]

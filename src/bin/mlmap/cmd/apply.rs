@@ -2,20 +2,21 @@
 
 use std::fmt::Write as _;
 
+use mlmap::host::data::{self, at, check_classes};
 use mlmap::host::dataset::Label;
+use mlmap::host::metrics::decision;
 use mlmap::Libm;
 
 use crate::args::ApplyArgs;
-use crate::cmd::inspect::read_table;
 use crate::error::{CliError, Result};
-use crate::load;
 use crate::output;
+use crate::shared::read_table;
 
 pub fn run(args: &ApplyArgs) -> Result<()> {
     output::check_outputs(&args.output, &[&args.table, &args.input])?;
     let (table, _) = read_table(&args.table)?;
-    let src = load::open(&args.input)?;
-    load::check_classes(&args.input, src.classes(), table.class_names())?;
+    let src = data::open(&args.input)?;
+    check_classes(&args.input, src.classes(), table.class_names())?;
     let names: Vec<&str> = table.class_names().collect();
     let k = names.len();
     let out_path = &args.output;
@@ -47,7 +48,7 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
             }
             let os = row.objectness as f32;
             let at = |e: mlmap::InferError| {
-                CliError::Input(format!("{}: {e}", load::at(&args.input, row.location())))
+                CliError::Input(format!("{}: {e}", at(&args.input, row.location())))
             };
             table.ml_into(&x, os, &mut ml, &mut scratch).map_err(at)?;
             table
@@ -70,7 +71,7 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
                 csv.write_field(&number).map_err(csv_err)?;
             }
             for scores in [&ml, &map] {
-                let pred = names.get(mlmap::argmax(scores)).copied().unwrap_or("");
+                let pred = names.get(decision(scores, &x)).copied().unwrap_or("");
                 csv.write_field(pred).map_err(csv_err)?;
             }
             csv.write_record(None::<&[u8]>).map_err(csv_err)?;

@@ -10,19 +10,19 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use mlmap::host::data::{self, Loaded};
+use mlmap::host::eval::{self, head_scores, Inputs};
 use mlmap::host::fit::{FitParams, TrainingSet};
 use mlmap::host::metrics::MetricsConfig;
-use mlmap::host::tune::{self, Objective};
+use mlmap::host::tune::{self, Objective, TuneParams};
 use mlmap::host::DynTable;
-use mlmap::{EdgeMode, Table, UpperTail};
+use mlmap::{EdgeMode, Head, Table, UpperTail};
 
 use crate::args::{DemoArgs, Format};
-use crate::cmd::eval::{self, Evaluation, Inputs};
-use crate::cmd::fit::{fit_error, summary, write_table};
-use crate::cmd::tune::{render, search, Grid};
-use crate::error::{CliError, Result};
-use crate::load::{self, Loaded};
+use crate::error::{fit_error, CliError, Result};
 use crate::output;
+use crate::report::{self, table_summary};
+use crate::shared::{write_plots, write_table};
 
 /// The shape the demo's firmware is built for.
 type Firmware = Table<3, 22, 17, 22, 4>;
@@ -37,7 +37,8 @@ fn device_check(
 ) -> Result<(usize, usize)> {
     let device = Firmware::from_bytes(bytes)
         .map_err(|e| CliError::Internal(format!("the no_std layer refused the table: {e}")))?;
-    let (ml_host, map_host) = eval::layer_scores(host, data, path)?;
+    let ml_host = head_scores(host, Head::Ml, data, path)?;
+    let map_host = head_scores(host, Head::Map, data, path)?;
     let mut differ = 0;
     let rows = data.logits.chunks_exact(3).zip(&data.objectness);
     let host_rows = ml_host.chunks_exact(3).zip(map_host.chunks_exact(3));
@@ -63,14 +64,6 @@ fn device_check(
     Ok((data.len(), differ))
 }
 
-fn value(ev: &Evaluation, method: &str, key: &str) -> Option<f64> {
-    ev.reports
-        .iter()
-        .find(|r| r.method == method)
-        .and_then(|r| r.metrics.iter().find(|(k, _)| k == key))
-        .and_then(|(_, v)| *v)
-}
-
 pub fn run(a: &DemoArgs) -> Result<()> {
     let path = |name: &str| a.data.join(name);
     let (train_p, val_p, test_p, ood_p) = (
@@ -80,10 +73,10 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         path("ood.csv"),
     );
     // Every input is read and checked before anything is written.
-    let train = TrainingSet::read(&load::open(&train_p)?).map_err(|e| fit_error(&train_p, e))?;
-    let val = load::load(&val_p)?;
-    let test = load::load(&test_p)?;
-    let ood = load::load(&ood_p)?;
+    let train = TrainingSet::read(&data::open(&train_p)?).map_err(|e| fit_error(&train_p, e))?;
+    let val = Loaded::read(&val_p)?;
+    let test = Loaded::read(&test_p)?;
+    let ood = Loaded::read(&ood_p)?;
     std::fs::create_dir_all(&a.output)
         .map_err(|e| CliError::input(&a.output, format!("cannot create: {e}")))?;
     let mut log = String::new();
@@ -100,41 +93,37 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     let fitted_path = a.output.join("fitted.mlmap");
     let size = write_table(&fitted_path, &fitted)?;
     let _ = writeln!(log, "1. fit (authors' detection settings)");
-    log.push_str(&summary(&fitted_path, &fitted, size));
+    log.push_str(&table_summary(&fitted_path, &fitted, size));
 
     // 2. Tune both lambdas on the validation set at the firmware's shape.
-    let grid = Grid {
-        bins_ml: vec![22],
-        bins_map: vec![17],
+    let params = TuneParams {
+        bins: vec![(Head::Ml, vec![22]), (Head::Map, vec![17])],
         lambdas: tune::lambda_grid(1e-8, 1e-1, 4).map_err(CliError::Input)?,
         objective: Objective::Ece,
         edges: EdgeMode::Linspace,
         tail: UpperTail::Zero,
         detail: 5,
     };
-    let (result, tuned) = search(&train, &val, &val_p, &grid)?;
+    let tune::Tuned {
+        result,
+        table: tuned,
+    } = tune::tune(&train, &val, &val_p, &params, |_, _| {})?;
     let tuned_path = a.output.join("tuned.mlmap");
     let size = write_table(&tuned_path, &tuned)?;
-    let tune_text = render(
-        &result,
-        grid.objective,
-        5,
-        (grid.lambdas.len(), grid.lambdas.len()),
-    );
+    let tune_text = report::candidates(&result, params.objective, 5, |h| params.candidates(h));
     output::write_bytes_atomic(&a.output.join("tune.txt"), tune_text.as_bytes())?;
     let _ = writeln!(
         log,
         "\n2. tune lambdas on {} (ECE, bins kept at 22 / 17)",
         val_p.display()
     );
-    log.push_str(&summary(&tuned_path, &tuned, size));
+    log.push_str(&table_summary(&tuned_path, &tuned, size));
 
     // 3. Evaluate the five methods.
     let config = MetricsConfig::default();
     let ev = eval::evaluate(&Inputs {
         table: &tuned,
-        test: &test,
-        test_path: &test_p,
+        test: (&test, &test_p),
         val: Some((&val, &val_p)),
         ood: Some((&ood, &ood_p)),
         config,
@@ -144,17 +133,20 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         (Format::Json, "eval.json"),
         (Format::Markdown, "eval.md"),
     ] {
-        output::write_bytes_atomic(&a.output.join(name), ev.render(format, &config).as_bytes())?;
+        output::write_bytes_atomic(
+            &a.output.join(name),
+            report::evaluation(&ev, format).as_bytes(),
+        )?;
     }
     let plots_dir = a.output.join("plots");
-    let n_plots = ev.plot(&plots_dir, &tuned, config.bins)?;
+    let n_plots = write_plots(&ev, &plots_dir, &tuned)?;
     let _ = writeln!(
         log,
         "\n3. evaluate on {} and {}",
         test_p.display(),
         ood_p.display()
     );
-    log.push_str(&ev.render(Format::Text, &config));
+    log.push_str(&report::evaluation(&ev, Format::Text));
 
     // 4. The no_std layer decodes the written table and scores like the host.
     let bytes = std::fs::read(&tuned_path).map_err(|e| CliError::internal(&tuned_path, e))?;
@@ -175,24 +167,20 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     let pct = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.1}%", 100.0 * v));
     let num = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
     let _ = writeln!(log, "\nsummary");
-    let _ = writeln!(
-        log,
-        "  calibration (ECE, lower is better): sigmoid {}, softmax {}, temperature {}, ML {}, MAP {}",
-        num(value(&ev, "sigmoid", "ece")),
-        num(value(&ev, "softmax", "ece")),
-        num(value(&ev, "temperature", "ece")),
-        num(value(&ev, "ml", "ece")),
-        num(value(&ev, "map", "ece")),
-    );
-    let _ = writeln!(
-        log,
-        "  never-seen objects scored above 0.9: sigmoid {}, softmax {}, temperature {}, ML {}, MAP {}",
-        pct(value(&ev, "sigmoid", "ood_over_0_9")),
-        pct(value(&ev, "softmax", "ood_over_0_9")),
-        pct(value(&ev, "temperature", "ood_over_0_9")),
-        pct(value(&ev, "ml", "ood_over_0_9")),
-        pct(value(&ev, "map", "ood_over_0_9")),
-    );
+    let line = |what: &str, key: &str, show: &dyn Fn(Option<f64>) -> String| {
+        let values: Vec<String> = ev
+            .methods
+            .iter()
+            .map(|r| format!("{} {}", r.method.title(), show(ev.value(r.method, key))))
+            .collect();
+        format!("  {what}: {}\n", values.join(", "))
+    };
+    log.push_str(&line("calibration (ECE, lower is better)", "ece", &num));
+    log.push_str(&line(
+        "never-seen objects scored above 0.9",
+        "ood_over_0_9",
+        &pct,
+    ));
     let _ = writeln!(
         log,
         "  wrote fitted.mlmap, tuned.mlmap, tune.txt, eval.txt, eval.json, eval.md and {n_plots} plots into {}",

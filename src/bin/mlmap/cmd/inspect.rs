@@ -1,35 +1,15 @@
 //! `mlmap inspect TABLE`: a readable summary of a table file.
 
 use std::fmt::Write as _;
-use std::fs;
 
+use mlmap::host::names::Named;
 use mlmap::host::DynTable;
-use mlmap::{EdgeMode, Histogram, UpperTail};
+use mlmap::Histogram;
 
 use crate::args::{Format, InspectArgs};
-use crate::error::{CliError, Result};
+use crate::error::Result;
 use crate::output;
-
-/// Reads and validates a table file, with errors naming it.
-pub fn read_table(path: &std::path::Path) -> Result<(DynTable, Vec<u8>)> {
-    let bytes = fs::read(path).map_err(|e| CliError::input(path, e))?;
-    let table = DynTable::from_bytes(&bytes).map_err(|e| CliError::input(path, e))?;
-    Ok((table, bytes))
-}
-
-pub fn edge_mode_name(m: EdgeMode) -> &'static str {
-    match m {
-        EdgeMode::Linspace => "linspace",
-        EdgeMode::Matlab => "matlab",
-    }
-}
-
-pub fn tail_name(t: UpperTail) -> &'static str {
-    match t {
-        UpperTail::Zero => "zero",
-        UpperTail::Clamp => "clamp",
-    }
-}
+use crate::shared::read_table;
 
 /// Eight-level bar characters, lowest first.
 const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
@@ -72,7 +52,7 @@ fn histogram_lines(s: &mut String, head: &str, name: &str, h: &Histogram<Vec<f32
 }
 
 /// The text report.
-pub fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -> String {
+fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -> String {
     let st = t.settings();
     let crc = bytes
         .get(bytes.len().saturating_sub(4)..)
@@ -91,8 +71,8 @@ pub fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: boo
     let _ = writeln!(
         s,
         "edges       {}, upper tail {}",
-        edge_mode_name(st.edge_mode),
-        tail_name(st.upper_tail)
+        st.edge_mode.name(),
+        st.upper_tail.name()
     );
     let _ = writeln!(
         s,
@@ -132,7 +112,7 @@ pub fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: boo
 }
 
 /// The JSON report.
-pub fn render_json(path: &std::path::Path, t: &DynTable, bytes: &[u8]) -> String {
+fn render_json(path: &std::path::Path, t: &DynTable, bytes: &[u8]) -> String {
     let st = t.settings();
     let hist = |h: &Histogram<Vec<f32>>| {
         let edges: Vec<f32> = (0..=h.bins()).map(|k| h.edge(k)).collect();
@@ -158,8 +138,8 @@ pub fn render_json(path: &std::path::Path, t: &DynTable, bytes: &[u8]) -> String
         "format_version": mlmap::FORMAT_VERSION,
         "bytes": bytes.len(),
         "crc_ok": true,
-        "edge_mode": edge_mode_name(st.edge_mode),
-        "upper_tail": tail_name(st.upper_tail),
+        "edge_mode": st.edge_mode.name(),
+        "upper_tail": st.upper_tail.name(),
         "bins_ml": t.bins_ml(),
         "bins_map": t.bins_map(),
         "lambda_ml": st.lambda_ml,

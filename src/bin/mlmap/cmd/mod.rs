@@ -1,4 +1,6 @@
-//! One module per subcommand; `run` dispatches.
+//! One module per subcommand; `run` dispatches. A command parses its flags, calls the
+//! library and prints; what commands share is in `shared` and `report`, never in
+//! another command.
 
 pub mod apply;
 pub mod demo;
@@ -7,9 +9,7 @@ pub mod fit;
 pub mod inspect;
 pub mod tune;
 
-use mlmap::{EdgeMode, UpperTail};
-
-use crate::args::{Cli, Command, Edges, Tail};
+use crate::args::{Cli, Command};
 use crate::error::Result;
 
 /// Runs the parsed command line.
@@ -21,21 +21,5 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(a) => eval::run(a),
         Command::Inspect(a) => inspect::run(a),
         Command::Demo(a) => demo::run(a),
-    }
-}
-
-/// The library's edge mode for a flag value.
-pub fn edge_mode(e: Edges) -> EdgeMode {
-    match e {
-        Edges::Linspace => EdgeMode::Linspace,
-        Edges::Matlab => EdgeMode::Matlab,
-    }
-}
-
-/// The library's tail policy for a flag value.
-pub fn upper_tail(t: Tail) -> UpperTail {
-    match t {
-        Tail::Zero => UpperTail::Zero,
-        Tail::Clamp => UpperTail::Clamp,
     }
 }

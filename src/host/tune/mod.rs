@@ -7,16 +7,24 @@
 //! Each lambda candidate is then one pass of additions and the layer's own
 //! normalisation ([`scores_from_evidence`]), so a candidate's scores are bit for bit
 //! the scores the layer will produce with the written table. The objective is
-//! accumulated on the fly, without storing scores.
+//! accumulated on the fly by the metrics module's [`Accumulator`], without storing
+//! scores.
+//!
+//! [`search`] works on rows and histograms; [`tune`] runs the whole job on a training
+//! set and a validation file and builds the table of the best candidates.
+
+mod pipeline;
 
 use std::prelude::rust_2021::*;
 use std::{format, vec};
 
-use crate::host::metrics::{Binning, Edges};
-use crate::{scores_from_evidence, Gaussian, Histogram, Libm, UpperTail};
+pub use self::pipeline::{tune, TuneParams, Tuned};
+use crate::host::metrics::{Accumulator, MetricsConfig, Parts};
+use crate::host::names::{Name, Named};
+use crate::{scores_from_evidence, Gaussian, Head, Histogram, Libm, UpperTail};
 
 /// What the search minimises.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Objective {
     /// Expected calibration error, 10 bins `((m-1)/M, m/M]` (DESIGN §1.5 default).
     Ece,
@@ -25,6 +33,36 @@ pub enum Objective {
     /// Mean Brier score over all rows.
     Brier,
 }
+
+impl Named for Objective {
+    const WHAT: &'static str = "objective";
+    const NAMES: &'static [Name<Self>] = &[
+        Name::new(
+            Self::Ece,
+            "ece",
+            "Expected calibration error (10 bins, DESIGN §1.5)",
+        ),
+        Name::new(
+            Self::Nll,
+            "nll",
+            "Negative log-likelihood of the labelled rows",
+        ),
+        Name::new(Self::Brier, "brier", "Brier score over all rows"),
+    ];
+}
+
+impl Objective {
+    /// The metrics an [`Accumulator`] needs to compute this objective alone.
+    fn parts(self) -> Parts {
+        Parts {
+            calibration: self == Self::Ece,
+            nll: self == Self::Nll,
+            brier: self == Self::Brier,
+        }
+    }
+}
+
+crate::host::names::display_and_parse!(Objective);
 
 /// Validation rows, in the layer's precision.
 #[derive(Debug, Clone, Copy)]
@@ -55,6 +93,8 @@ pub struct Candidate {
     pub nll: Option<f64>,
     /// Mean Brier score; for the best candidates only.
     pub brier: Option<f64>,
+    /// Top-1 accuracy of the labelled rows (DESIGN §1.5); for the best candidates only.
+    pub accuracy: Option<f64>,
 }
 
 /// Why a search could not run.
@@ -140,101 +180,8 @@ pub fn lambda_grid(min: f64, max: f64, per_decade: usize) -> Result<Vec<f32>, St
     Ok(out)
 }
 
-/// Running sums of the objectives over the rows of one candidate; `only` restricts
-/// the work to one objective (the NLL's logarithm is the costly part).
-struct Accumulator<'e> {
-    only: Option<Objective>,
-    /// The DESIGN §1.5 bins, shared with [`crate::host::metrics`].
-    edges: &'e Edges,
-    bins: [(u64, f64, f64); ECE_BINS],
-    n: u64,
-    nll_sum: f64,
-    nll_n: u64,
-    brier_sum: f64,
-}
-
 /// ECE bins of the tuning objective (DESIGN §1.5 default).
 const ECE_BINS: usize = 10;
-
-impl<'e> Accumulator<'e> {
-    fn new(only: Option<Objective>, edges: &'e Edges) -> Self {
-        Self {
-            only,
-            edges,
-            bins: [(0, 0.0, 0.0); ECE_BINS],
-            n: 0,
-            nll_sum: 0.0,
-            nll_n: 0,
-            brier_sum: 0.0,
-        }
-    }
-
-    fn wants(&self, o: Objective) -> bool {
-        self.only.is_none_or(|x| x == o)
-    }
-
-    fn add(&mut self, scores: &[f32], label: Option<usize>) {
-        self.n += 1;
-        if self.wants(Objective::Ece) {
-            let best = crate::argmax(scores);
-            let conf = f64::from(scores.get(best).copied().unwrap_or(0.0));
-            let correct = label == Some(best);
-            if let Some(bin) = self.bins.get_mut(self.edges.bin(conf)) {
-                bin.0 += 1;
-                bin.1 += conf;
-                bin.2 += if correct { 1.0 } else { 0.0 };
-            }
-        }
-        if self.wants(Objective::Nll) {
-            if let Some(l) = label {
-                let s = f64::from(scores.get(l).copied().unwrap_or(0.0));
-                self.nll_sum -= s.max(1e-12).ln();
-                self.nll_n += 1;
-            }
-        }
-        if self.wants(Objective::Brier) {
-            for (i, &s) in scores.iter().enumerate() {
-                let y = if label == Some(i) { 1.0 } else { 0.0 };
-                let d = f64::from(s) - y;
-                self.brier_sum += d * d;
-            }
-        }
-    }
-
-    fn finish(&self, bins: usize, lambda: f32, objective: Objective) -> Candidate {
-        let n = self.n.max(1) as f64;
-        let ece = self.wants(Objective::Ece).then(|| {
-            self.bins
-                .iter()
-                .filter(|b| b.0 > 0)
-                .map(|&(c, conf, acc)| (c as f64 / n) * (acc / c as f64 - conf / c as f64).abs())
-                .sum()
-        });
-        let nll = (self.wants(Objective::Nll) && self.nll_n > 0)
-            .then(|| self.nll_sum / self.nll_n as f64);
-        let brier = self.wants(Objective::Brier).then(|| self.brier_sum / n);
-        let value = match objective {
-            Objective::Ece => ece,
-            Objective::Nll => nll,
-            Objective::Brier => brier,
-        };
-        Candidate {
-            bins,
-            lambda,
-            objective: value.unwrap_or(f64::INFINITY),
-            ece,
-            nll,
-            brier,
-        }
-    }
-}
-
-/// Which head a sweep scores.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum HeadKind {
-    Ml,
-    Map,
-}
 
 /// Per-row evidence of one head for one set of histograms: `L` (ML) or `L * P` (MAP,
 /// `P` only where `L > 0`, as the layer computes it).
@@ -243,7 +190,7 @@ fn evidence_into(
     hists: &[Histogram<Vec<f32>>],
     pdf: &[f32],
     tail: UpperTail,
-    head: HeadKind,
+    head: Head,
     out: &mut [f32],
 ) {
     let k = val.k;
@@ -255,76 +202,160 @@ fn evidence_into(
         for (((e, &x), h), &p) in e_row.iter_mut().zip(x_row).zip(hists).zip(p_row) {
             let l = h.likelihood(x, tail);
             *e = match head {
-                HeadKind::Ml => l,
-                HeadKind::Map if l > 0.0 => l * p,
-                HeadKind::Map => 0.0,
+                Head::Ml => l,
+                Head::Map if l > 0.0 => l * p,
+                Head::Map | Head::Bayes => 0.0,
             };
         }
     }
 }
 
-/// Scores one lambda over every row given the evidence.
+/// Scores one lambda over every row given the evidence: the objective alone, or all
+/// metrics (`ece`, `nll`, `brier`, `accuracy`) with `all`.
 fn score(
     val: &ValRows<'_>,
     evidence: &[f32],
     bins: usize,
     lambda: f32,
     objective: Objective,
-    only: Option<Objective>,
+    all: bool,
 ) -> Candidate {
     let k = val.k;
     let mut scores = vec![0.0f32; k];
     let mut scratch = vec![0.0f32; k];
-    let edges = Edges::new(Binning::Design, ECE_BINS);
-    let mut acc = Accumulator::new(only, &edges);
-    for ((e, &os), &label) in evidence.chunks_exact(k).zip(val.objectness).zip(val.labels) {
+    let cfg = MetricsConfig {
+        bins: ECE_BINS,
+        ..MetricsConfig::default()
+    };
+    let parts = if all { Parts::ALL } else { objective.parts() };
+    let Ok(mut acc) = Accumulator::new(&cfg, parts) else {
+        return Candidate {
+            bins,
+            lambda,
+            objective: f64::INFINITY,
+            ece: None,
+            nll: None,
+            brier: None,
+            accuracy: None,
+        };
+    };
+    let rows = evidence
+        .chunks_exact(k)
+        .zip(val.logits.chunks_exact(k))
+        .zip(val.objectness)
+        .zip(val.labels);
+    for (((e, x), &os), &label) in rows {
         if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
-            acc.add(&scores, label);
+            acc.add(&scores, x, label);
         }
     }
-    acc.finish(bins, lambda, objective)
+    let (ece, nll, brier) = (acc.ece(), acc.nll(), acc.brier());
+    let value = match objective {
+        Objective::Ece => ece,
+        Objective::Nll => nll,
+        Objective::Brier => brier,
+    };
+    Candidate {
+        bins,
+        lambda,
+        objective: value.unwrap_or(f64::INFINITY),
+        ece,
+        nll,
+        brier,
+        accuracy: acc.accuracy(),
+    }
 }
 
-/// The search's result: every candidate of each head, best first.
+/// The candidates of one head, best first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeadCandidates {
+    /// The head.
+    pub head: Head,
+    /// Every candidate, best first.
+    pub candidates: Vec<Candidate>,
+}
+
+/// The search's result: every candidate of each head searched, best first.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TuneResult {
-    /// ML candidates, best first.
-    pub ml: Vec<Candidate>,
-    /// MAP candidates, best first.
-    pub map: Vec<Candidate>,
+    /// One entry per head, in the order of [`SearchParams::bins`].
+    pub heads: Vec<HeadCandidates>,
 }
 
-/// Searches both heads.
+impl TuneResult {
+    /// The candidates of `head`, best first (empty when it was not searched).
+    pub fn candidates(&self, head: Head) -> &[Candidate] {
+        self.heads
+            .iter()
+            .find(|h| h.head == head)
+            .map_or(&[], |h| h.candidates.as_slice())
+    }
+}
+
+/// What [`search`] searches.
+///
+/// # Parameters
+///
+/// | Name | Purpose |
+/// |---|---|
+/// | `val` | the validation rows candidates are scored on |
+/// | `priors` | the `K` fitted Gaussians (used by the MAP head) |
+/// | `tail` | the likelihood above the last edge |
+/// | `bins` | the bin counts to try, per head (each head is searched on its own) |
+/// | `lambdas` | the smoothing values to try (every head) |
+/// | `objective` | what to minimise |
+/// | `detail` | how many of the best candidates per head get every metric |
+#[derive(Debug, Clone, Copy)]
+pub struct SearchParams<'a> {
+    /// Validation rows.
+    pub val: ValRows<'a>,
+    /// The `K` fitted priors.
+    pub priors: &'a [Gaussian],
+    /// Likelihood above the last edge.
+    pub tail: UpperTail,
+    /// Bin counts to try, per head.
+    pub bins: &'a [(Head, Vec<usize>)],
+    /// Lambdas to try.
+    pub lambdas: &'a [f32],
+    /// What to minimise.
+    pub objective: Objective,
+    /// How many of the best candidates per head get every metric.
+    pub detail: usize,
+}
+
+impl SearchParams<'_> {
+    /// Every distinct bin count of every head, ascending.
+    pub fn distinct_bins(&self) -> Vec<usize> {
+        let mut all: Vec<usize> = self.bins.iter().flat_map(|(_, b)| b).copied().collect();
+        all.sort_unstable();
+        all.dedup();
+        all
+    }
+}
+
+/// Searches every head of `p.bins`.
 ///
 /// `histograms(b)` returns the K fitted histograms with `b` bins (called once per
-/// distinct bin count); `priors` are the K fitted Gaussians. Every candidate gets its
-/// objective; the best `detail` of each head also get all three metrics. The bin
-/// counts are shared among the machine's cores. `progress(done, total)` is called as
-/// bin counts complete.
+/// distinct bin count). Every candidate gets its objective; the best `p.detail` of
+/// each head also get every metric of [`Candidate`]. The bin counts are shared among the
+/// machine's cores. `progress(done, total)` is called as bin counts complete.
 ///
 /// # Errors
 ///
 /// [`TuneError`] for an inconsistent validation set, an empty grid, or a failing
 /// `histograms`.
-#[allow(clippy::too_many_arguments)]
 pub fn search<H>(
+    p: &SearchParams<'_>,
     mut histograms: H,
-    priors: &[Gaussian],
-    tail: UpperTail,
-    val: &ValRows<'_>,
-    bins_ml: &[usize],
-    bins_map: &[usize],
-    lambdas: &[f32],
-    objective: Objective,
-    detail: usize,
     progress: impl Fn(usize, usize) + Sync,
 ) -> Result<TuneResult, TuneError>
 where
     H: FnMut(usize) -> Result<Vec<Histogram<Vec<f32>>>, String>,
 {
+    let val = &p.val;
     let k = val.k;
     let n = val.labels.len();
-    if k < 2 || priors.len() != k || val.logits.len() != n * k || val.objectness.len() != n {
+    if k < 2 || p.priors.len() != k || val.logits.len() != n * k || val.objectness.len() != n {
         return Err(TuneError::BadValidationSet(
             "logits, objectness, labels and priors disagree in size".into(),
         ));
@@ -332,18 +363,16 @@ where
     if n == 0 {
         return Err(TuneError::BadValidationSet("no rows".into()));
     }
-    if lambdas.is_empty() || (bins_ml.is_empty() && bins_map.is_empty()) {
+    if p.lambdas.is_empty() || p.bins.iter().all(|(_, b)| b.is_empty()) {
         return Err(TuneError::EmptyGrid);
     }
     // The prior of every validation logit, once.
     let pdf: Vec<f32> = val
         .logits
         .chunks_exact(k)
-        .flat_map(|row| row.iter().zip(priors).map(|(&x, g)| g.pdf::<Libm>(x)))
+        .flat_map(|row| row.iter().zip(p.priors).map(|(&x, g)| g.pdf::<Libm>(x)))
         .collect();
-    let mut all: Vec<usize> = bins_ml.iter().chain(bins_map).copied().collect();
-    all.sort_unstable();
-    all.dedup();
+    let all = p.distinct_bins();
     let mut work = Vec::with_capacity(all.len());
     for &b in &all {
         let hists = histograms(b).map_err(TuneError::Histogram)?;
@@ -360,40 +389,41 @@ where
     let done = std::sync::atomic::AtomicUsize::new(0);
     let sweep = |part: &[(usize, Vec<Histogram<Vec<f32>>>)]| {
         let mut evidence = vec![0.0f32; n * k];
-        let (mut ml, mut map) = (Vec::new(), Vec::new());
+        let mut found: Vec<Vec<Candidate>> = vec![Vec::new(); p.bins.len()];
         for (b, hists) in part {
-            for (head, set, out) in [
-                (HeadKind::Ml, bins_ml, &mut ml),
-                (HeadKind::Map, bins_map, &mut map),
-            ] {
+            for ((head, set), out) in p.bins.iter().zip(&mut found) {
                 if set.contains(b) {
-                    evidence_into(val, hists, &pdf, tail, head, &mut evidence);
-                    for &l in lambdas {
-                        out.push(score(val, &evidence, *b, l, objective, Some(objective)));
+                    evidence_into(val, hists, &pdf, p.tail, *head, &mut evidence);
+                    for &l in p.lambdas {
+                        out.push(score(val, &evidence, *b, l, p.objective, false));
                     }
                 }
             }
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(d, all.len());
         }
-        (ml, map)
+        found
     };
     let chunk = work.len().div_ceil(threads);
-    let parts: Vec<(Vec<Candidate>, Vec<Candidate>)> = std::thread::scope(|s| {
+    let parts: Vec<Vec<Vec<Candidate>>> = std::thread::scope(|s| {
         let handles: Vec<_> = work
             .chunks(chunk)
             .map(|part| s.spawn(move || sweep(part)))
             .collect();
         handles.into_iter().filter_map(|h| h.join().ok()).collect()
     });
-    let (mut ml, mut map): (Vec<Candidate>, Vec<Candidate>) = (Vec::new(), Vec::new());
-    for (a, b) in parts {
-        ml.extend(a);
-        map.extend(b);
-    }
-    let expected = |set: &[usize]| set.len() * lambdas.len();
-    if ml.len() != expected(bins_ml) || map.len() != expected(bins_map) {
-        return Err(TuneError::Histogram("a search thread failed".into()));
+    let mut heads: Vec<HeadCandidates> = p
+        .bins
+        .iter()
+        .map(|(head, _)| HeadCandidates {
+            head: *head,
+            candidates: Vec::new(),
+        })
+        .collect();
+    for part in parts {
+        for (h, found) in heads.iter_mut().zip(part) {
+            h.candidates.extend(found);
+        }
     }
     // Stable order: objective, then fewer bins, then smaller lambda.
     let order = |a: &Candidate, b: &Candidate| {
@@ -402,19 +432,21 @@ where
             .then(a.bins.cmp(&b.bins))
             .then(a.lambda.total_cmp(&b.lambda))
     };
-    ml.sort_by(order);
-    map.sort_by(order);
-    // All three metrics for the best candidates.
     let mut evidence = vec![0.0f32; n * k];
-    for (head, cands) in [(HeadKind::Ml, &mut ml), (HeadKind::Map, &mut map)] {
-        for c in cands.iter_mut().take(detail) {
+    for (h, (_, set)) in heads.iter_mut().zip(p.bins) {
+        if h.candidates.len() != set.len() * p.lambdas.len() {
+            return Err(TuneError::Histogram("a search thread failed".into()));
+        }
+        h.candidates.sort_by(order);
+        // Every metric for the best candidates.
+        for c in h.candidates.iter_mut().take(p.detail) {
             if let Some((_, hists)) = work.iter().find(|(b, _)| *b == c.bins) {
-                evidence_into(val, hists, &pdf, tail, head, &mut evidence);
-                *c = score(val, &evidence, c.bins, c.lambda, objective, None);
+                evidence_into(val, hists, &pdf, p.tail, h.head, &mut evidence);
+                *c = score(val, &evidence, c.bins, c.lambda, p.objective, true);
             }
         }
     }
-    Ok(TuneResult { ml, map })
+    Ok(TuneResult { heads })
 }
 
 #[cfg(test)]

@@ -1,0 +1,50 @@
+//! Helpers more than one command uses: reading and writing tables, writing plots.
+
+use std::fs;
+use std::path::Path;
+
+use mlmap::host::eval::Evaluation;
+use mlmap::host::names::Named;
+use mlmap::host::{plots, DynTable};
+
+use crate::error::{CliError, Result};
+use crate::output;
+
+/// Reads and validates a table file, with errors naming it.
+pub fn read_table(path: &Path) -> Result<(DynTable, Vec<u8>)> {
+    let bytes = fs::read(path).map_err(|e| CliError::input(path, e))?;
+    let table = DynTable::from_bytes(&bytes).map_err(|e| CliError::input(path, e))?;
+    Ok((table, bytes))
+}
+
+/// Encodes and writes a table atomically; returns its size.
+pub fn write_table(path: &Path, table: &DynTable) -> Result<usize> {
+    let bytes = table
+        .to_vec()
+        .map_err(|e| CliError::internal(path, format!("cannot encode the table: {e}")))?;
+    output::write_bytes_atomic(path, &bytes)?;
+    Ok(bytes.len())
+}
+
+/// Writes every plot of an evaluation into `dir`; returns how many files were written.
+pub fn write_plots(ev: &Evaluation, dir: &Path, table: &DynTable) -> Result<usize> {
+    fs::create_dir_all(dir).map_err(|e| CliError::input(dir, format!("cannot create: {e}")))?;
+    let methods: Vec<(&str, &[f64])> = ev
+        .methods
+        .iter()
+        .map(|r| (r.method.name(), r.test.as_slice()))
+        .collect();
+    let set = plots::Scored {
+        class_names: &ev.class_names,
+        methods: &methods,
+        labels: &ev.labels,
+        logits: &ev.logits,
+    };
+    let written = plots::plot_all(dir, &set, &ev.config, Some(table)).map_err(|e| match &e {
+        plots::PlotError::Io { source, .. } if output::location_refused(source) => {
+            CliError::Input(e.to_string())
+        }
+        _ => CliError::Internal(e.to_string()),
+    })?;
+    Ok(written.len())
+}

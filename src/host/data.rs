@@ -1,0 +1,153 @@
+//! Every row of a data file in memory, for the pipelines that need them all at once
+//! ([`eval`](super::eval), [`tune`](super::tune)); fitting and scoring stream instead.
+
+use std::path::Path;
+use std::string::String;
+use std::vec::Vec;
+
+use super::dataset::{DataSource, Label, Location};
+use super::error::HostError;
+
+/// Opens a data source (CSV file or NPY directory).
+///
+/// # Errors
+///
+/// [`HostError`] naming the file: bad input for a malformed file, internal for I/O.
+pub fn open(path: &Path) -> Result<DataSource, HostError> {
+    Ok(DataSource::open(path)?)
+}
+
+/// `PATH:LINE` for a CSV line, `PATH: row index I` for an NPY row (as data errors).
+pub fn at(path: &Path, location: Location) -> String {
+    match location {
+        Location::Line(l) => std::format!("{}:{l}", path.display()),
+        Location::Row(r) => std::format!("{}: row index {r}", path.display()),
+    }
+}
+
+/// Every row of a data file.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// Class names, in column order.
+    pub classes: Vec<String>,
+    /// N labels.
+    pub labels: Vec<Label>,
+    /// N objectness scores.
+    pub objectness: Vec<f64>,
+    /// N x K logits, row-major.
+    pub logits: Vec<f64>,
+    /// Where each row is in the file.
+    pub locations: Vec<Location>,
+    /// Whether the file has labels (a `label` column or `labels.npy`).
+    pub has_labels: bool,
+    /// Where the first row without a label is, if any.
+    pub first_missing_label: Option<Location>,
+}
+
+impl Loaded {
+    /// Reads every row of `path`.
+    ///
+    /// # Errors
+    ///
+    /// [`HostError`] naming the file (and line): a malformed file, or no rows.
+    pub fn read(path: &Path) -> Result<Self, HostError> {
+        let src = open(path)?;
+        let mut d = Self {
+            classes: src.classes().to_vec(),
+            labels: Vec::new(),
+            objectness: Vec::new(),
+            logits: Vec::new(),
+            locations: Vec::new(),
+            has_labels: src.has_labels(),
+            first_missing_label: None,
+        };
+        src.for_each_row(|row| -> Result<(), HostError> {
+            if row.label == Label::Missing && d.first_missing_label.is_none() {
+                d.first_missing_label = Some(row.location());
+            }
+            d.labels.push(row.label);
+            d.objectness.push(row.objectness);
+            d.logits.extend_from_slice(row.logits);
+            d.locations.push(row.location());
+            Ok(())
+        })?;
+        if d.labels.is_empty() {
+            return Err(HostError::input(path, "holds no data rows"));
+        }
+        Ok(d)
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.labels.len()
+    }
+
+    /// Whether there are no rows ([`Loaded::read`] refuses such files).
+    pub fn is_empty(&self) -> bool {
+        self.labels.is_empty()
+    }
+
+    /// Labels as `Option<class>` (background → `None`), refusing missing labels.
+    ///
+    /// # Errors
+    ///
+    /// [`HostError::Input`] naming `path` (and the line) when the file has no labels
+    /// or a row's label is empty.
+    pub fn class_labels(&self, path: &Path) -> Result<Vec<Option<usize>>, HostError> {
+        if !self.has_labels {
+            return Err(HostError::input(
+                path,
+                "has no labels (a `label` column or labels.npy); labelled rows are needed here",
+            ));
+        }
+        if let Some(loc) = self.first_missing_label {
+            return Err(HostError::Input(std::format!(
+                "{}: column \"label\": the label is empty; a class name or background \
+                 is needed here",
+                at(path, loc)
+            )));
+        }
+        Ok(self
+            .labels
+            .iter()
+            .map(|l| match l {
+                Label::Class(c) => Some(*c),
+                Label::Background | Label::Missing => None,
+            })
+            .collect())
+    }
+
+    /// Logits in the layer's precision.
+    pub fn logits_f32(&self) -> Vec<f32> {
+        self.logits.iter().map(|&x| x as f32).collect()
+    }
+
+    /// Objectness in the layer's precision.
+    pub fn objectness_f32(&self) -> Vec<f32> {
+        self.objectness.iter().map(|&x| x as f32).collect()
+    }
+}
+
+/// Refuses data whose classes differ from the table's (names and order).
+///
+/// # Errors
+///
+/// [`HostError::Input`] naming `path` and both class lists.
+pub fn check_classes<'a>(
+    path: &Path,
+    data: &[String],
+    table: impl Iterator<Item = &'a str>,
+) -> Result<(), HostError> {
+    let table: Vec<&str> = table.collect();
+    if data.len() != table.len() || data.iter().zip(&table).any(|(a, b)| a != b) {
+        return Err(HostError::input(
+            path,
+            std::format!(
+                "its classes [{}] differ from the table's [{}] (same names, same order needed)",
+                data.join(", "),
+                table.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,214 @@
+//! Running sums: compensated summation, and the [`Accumulator`] of the metrics that
+//! can be computed in one pass without storing scores (`ece`, `mce`, `nll`, `brier`,
+//! `accuracy`).
+
+use std::vec::Vec;
+
+use super::binning::{calibration, BinSum, CalibrationBin, Edges};
+use super::outcome::{outcome, Outcome};
+use super::{MetricsConfig, MetricsError, NLL_FLOOR};
+
+/// Neumaier's compensated sum: the error does not grow with the number of terms.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Sum {
+    sum: f64,
+    carry: f64,
+}
+
+impl Sum {
+    pub(super) fn add(&mut self, x: f64) {
+        let t = self.sum + x;
+        if self.sum.abs() >= x.abs() {
+            self.carry += (self.sum - t) + x;
+        } else {
+            self.carry += (x - t) + self.sum;
+        }
+        self.sum = t;
+    }
+
+    pub(super) fn value(self) -> f64 {
+        self.sum + self.carry
+    }
+}
+
+/// Mean and population variance (two passes); `None` for no values.
+pub(super) fn mean_var(values: impl Iterator<Item = f64> + Clone) -> Option<(f64, f64)> {
+    let (mut sum, mut n) = (Sum::default(), 0usize);
+    for x in values.clone() {
+        sum.add(x);
+        n += 1;
+    }
+    if n == 0 {
+        return None;
+    }
+    let mean = sum.value() / n as f64;
+    let mut sq = Sum::default();
+    for x in values {
+        sq.add((x - mean) * (x - mean));
+    }
+    Some((mean, sq.value() / n as f64))
+}
+
+/// Which metrics an [`Accumulator`] keeps (each costs time per row).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Parts {
+    /// `ece`, `mce` and `accuracy`: the decision and the confidence bin of every row.
+    pub calibration: bool,
+    /// `nll`: a logarithm per labelled row.
+    pub nll: bool,
+    /// `brier`: a square per score.
+    pub brier: bool,
+}
+
+impl Parts {
+    /// Every metric.
+    pub const ALL: Self = Self {
+        calibration: true,
+        nll: true,
+        brier: true,
+    };
+}
+
+/// One pass over the rows of one method: the sums behind `ece`, `mce`, `nll`,
+/// `brier` and `accuracy` (DESIGN §1.5), without storing scores. The tuner scores each candidate with
+/// one, and [`evaluate`](super::evaluate) computes those metrics with one.
+///
+/// Rows are not checked: give scores in `[0, 1]` and labels below `K` (as
+/// [`evaluate`](super::evaluate) checks), or the sums mean nothing (but never panic).
+///
+/// # Examples
+///
+/// ```
+/// use mlmap::host::metrics::{Accumulator, MetricsConfig, Parts};
+///
+/// let mut acc = Accumulator::new(&MetricsConfig::default(), Parts::ALL)?;
+/// acc.add(&[0.9f32, 0.1], &[2.0f32, -1.0], Some(0));
+/// acc.add(&[0.3f32, 0.6], &[0.0f32, 1.0], None);
+/// assert_eq!(acc.rows(), 2);
+/// let brier = (0.01 + 0.01 + 0.09 + 0.36) / 2.0;
+/// assert!((acc.brier().unwrap() - brier).abs() < 1e-7);
+/// assert_eq!(acc.accuracy(), Some(1.0));
+/// # Ok::<(), mlmap::host::metrics::MetricsError>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Accumulator {
+    edges: Edges,
+    bins: Option<Vec<BinSum>>,
+    nll: Option<(Sum, usize)>,
+    brier: Option<Sum>,
+    rows: usize,
+    labelled: usize,
+    correct: usize,
+}
+
+impl Accumulator {
+    /// An empty accumulator keeping `parts`, binning as `cfg` says.
+    ///
+    /// # Errors
+    ///
+    /// [`MetricsError::Bins`] when `cfg.bins` is 0 or above [`MAX_BINS`](super::MAX_BINS).
+    pub fn new(cfg: &MetricsConfig, parts: Parts) -> Result<Self, MetricsError> {
+        if cfg.bins == 0 || cfg.bins > super::MAX_BINS {
+            return Err(MetricsError::Bins);
+        }
+        let edges = Edges::new(cfg.binning, cfg.bins);
+        let bins = parts
+            .calibration
+            .then(|| std::vec![BinSum::default(); edges.len()]);
+        Ok(Self {
+            edges,
+            bins,
+            nll: parts.nll.then(|| (Sum::default(), 0)),
+            brier: parts.brier.then(Sum::default),
+            rows: 0,
+            labelled: 0,
+            correct: 0,
+        })
+    }
+
+    /// Adds one row: its `K` scores, its logits (for the decision, DESIGN §1.7; may be
+    /// empty) and its label (`None` for background).
+    pub fn add<S, L>(&mut self, scores: &[S], logits: &[L], label: Option<usize>)
+    where
+        S: Copy + PartialOrd + Into<f64>,
+        L: Copy + PartialOrd,
+    {
+        let o = self.bins.is_some().then(|| outcome(scores, logits, label));
+        self.add_row(scores, label, o.as_ref());
+    }
+
+    /// Adds a row whose outcome is known (needed only when calibration is kept).
+    pub(super) fn add_row<S: Copy + Into<f64>>(
+        &mut self,
+        scores: &[S],
+        label: Option<usize>,
+        o: Option<&Outcome>,
+    ) {
+        self.rows += 1;
+        self.labelled += usize::from(label.is_some());
+        if let (Some(bins), Some(o)) = (&mut self.bins, o) {
+            self.correct += usize::from(o.correct);
+            if let Some(b) = bins.get_mut(self.edges.bin(o.conf)) {
+                b.count += 1;
+                b.correct += usize::from(o.correct);
+                b.conf.add(o.conf);
+            }
+        }
+        if let Some((sum, n)) = &mut self.nll {
+            if let Some(l) = label {
+                let s: f64 = scores.get(l).map_or(0.0, |&s| s.into());
+                sum.add(-s.max(NLL_FLOOR).ln());
+                *n += 1;
+            }
+        }
+        if let Some(sum) = &mut self.brier {
+            for (i, &s) in scores.iter().enumerate() {
+                let y = if label == Some(i) { 1.0 } else { 0.0 };
+                let d = s.into() - y;
+                sum.add(d * d);
+            }
+        }
+    }
+
+    /// Rows added.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Rows added with a class label.
+    pub fn labelled(&self) -> usize {
+        self.labelled
+    }
+
+    /// `accuracy`, the fraction of labelled rows whose decision is their label
+    /// (DESIGN §1.5, §1.7); `None` unless calibration is kept or without a labelled row.
+    pub fn accuracy(&self) -> Option<f64> {
+        self.bins.as_ref()?;
+        (self.labelled > 0).then(|| self.correct as f64 / self.labelled as f64)
+    }
+
+    /// The reliability bins, `ece` and `mce`; `None` unless calibration is kept.
+    pub fn calibration(&self) -> Option<(Vec<CalibrationBin>, f64, f64)> {
+        let bins = self.bins.as_ref()?;
+        Some(calibration(&self.edges, bins, self.rows.max(1)))
+    }
+
+    /// `ece` (0 without rows); `None` unless calibration is kept.
+    pub fn ece(&self) -> Option<f64> {
+        self.calibration().map(|c| c.1)
+    }
+
+    /// `nll`, the mean `-ln(max(s_label, 1e-12))` over labelled rows; `None` unless
+    /// kept or without a labelled row.
+    pub fn nll(&self) -> Option<f64> {
+        self.nll
+            .filter(|&(_, n)| n > 0)
+            .map(|(sum, n)| sum.value() / n as f64)
+    }
+
+    /// `brier`, the mean over rows of `sum_i (s_i - y_i)^2` (0 without rows); `None`
+    /// unless kept.
+    pub fn brier(&self) -> Option<f64> {
+        self.brier.map(|sum| sum.value() / self.rows.max(1) as f64)
+    }
+}
