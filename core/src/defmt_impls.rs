@@ -4,8 +4,8 @@
 use defmt::{write, Format, Formatter};
 
 use crate::{
-    BatchError, ClassName, DecodeError, EdgeMode, EncodeError, Gaussian, Head, Histogram,
-    InferError, Scores, Settings, Table, TableError, UpperTail,
+    BatchError, ClassName, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head,
+    Histogram, HistogramError, InferError, Scores, Settings, Table, TableError, UpperTail,
 };
 
 impl Format for Head {
@@ -189,5 +189,17 @@ impl Format for crate::FastMath {
 impl Format for crate::Micromath {
     fn format(&self, f: Formatter<'_>) {
         write!(f, "Micromath")
+    }
+}
+
+impl Format for HistogramError {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "{=str}", self.message())
+    }
+}
+
+impl Format for GaussianError {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "{=str}", self.message())
     }
 }

@@ -22,6 +22,24 @@ pub enum GaussianError {
     Variance,
 }
 
+impl GaussianError {
+    /// The one sentence describing the error, shared by `Display` and `defmt`.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Mean => "prior mean is not finite",
+            Self::Variance => "prior variance is not finite and positive (or 1/(2 var) overflows)",
+        }
+    }
+}
+
+impl core::fmt::Display for GaussianError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.message())
+    }
+}
+
+impl core::error::Error for GaussianError {}
+
 /// A validated univariate Gaussian prior `N(x | mean, var)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Gaussian {

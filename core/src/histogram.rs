@@ -52,6 +52,26 @@ pub enum HistogramError {
     Frequencies,
 }
 
+impl HistogramError {
+    /// The one sentence describing the error, shared by `Display` and `defmt`.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Edges => "histogram edges are not finite, or not strictly increasing in f32",
+            Self::Frequencies => {
+                "histogram frequencies are not finite, non-negative and summing to 1"
+            }
+        }
+    }
+}
+
+impl core::fmt::Display for HistogramError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.message())
+    }
+}
+
+impl core::error::Error for HistogramError {}
+
 /// A validated normalised histogram over equal-width bins.
 ///
 /// `F` holds the `B` frequencies: `[f32; B]` in a [`Table`](crate::Table), `Vec<f32>` on

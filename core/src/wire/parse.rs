@@ -1,0 +1,267 @@
+//! The one body parser of the `.mlmap` format: postcard's deserializer driven field by
+//! field into the storage a [`BodySink`] lends, so that a fixed-size table decodes in
+//! place and every kind of table decodes through the same code.
+
+use core::fmt;
+
+use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
+use serde::Deserialize;
+
+use super::{Settings, SettingsWire};
+use crate::error::{DecodeError, Head};
+use crate::histogram::Axis;
+
+#[cfg(test)]
+use super::BodyWire;
+
+/// Parses a version-1 body into settings and the class sequence `C` with serde's derived
+/// decoder; every byte must be used. Only a test oracle: tables decode through
+/// [`parse_body_into`].
+#[cfg(test)]
+pub(crate) fn parse_body<'a, C: Deserialize<'a>>(
+    body: &'a [u8],
+) -> Result<(Settings, C), DecodeError> {
+    let (wire, rest) =
+        postcard::take_from_bytes::<BodyWire<C>>(body).map_err(|_| DecodeError::Malformed)?;
+    if !rest.is_empty() {
+        return Err(DecodeError::Malformed);
+    }
+    Ok((wire.settings.to_settings()?, wire.classes))
+}
+
+/// Receives the classes of a body as they are parsed, so that a fixed-size table can be
+/// decoded straight into its own storage, one field at a time, with no intermediate
+/// copy of the classes on the stack.
+pub(crate) trait BodySink<'a> {
+    /// Most classes the storage holds; a longer sequence is malformed.
+    fn capacity(&self) -> usize;
+    /// Where class `class`'s frequencies of `head` go; a longer sequence is malformed.
+    fn freqs(&mut self, class: usize, head: Head) -> &mut [f32];
+    /// Every other field of class `class`, once its frequencies are stored.
+    fn class(&mut self, class: usize, fields: ClassFields<'a>);
+    /// Where the Bayes head's sequences go (row counts, axes, log-terms); a longer
+    /// sequence is malformed. Only called for a table with a Bayes head.
+    fn bayes(&mut self) -> BayesSlots<'_>;
+}
+
+/// The storage a Bayes head is parsed into (axes get their `lo` and `hi` only).
+pub(crate) struct BayesSlots<'s> {
+    pub(crate) rows: &'s mut [u64],
+    pub(crate) axes: &'s mut [Axis],
+    pub(crate) terms: &'s mut [f32],
+}
+
+/// What a body held besides the classes' storage: the settings, the number of classes
+/// and, with a Bayes head, its lambda and the lengths of its three sequences.
+pub(crate) struct Parsed {
+    pub(crate) settings: Settings,
+    pub(crate) classes: usize,
+    pub(crate) bayes: Option<(f32, [usize; 3])>,
+}
+
+/// The fields of one class besides its frequencies, as parsed (not validated).
+pub(crate) struct ClassFields<'a> {
+    pub(crate) name: &'a str,
+    pub(crate) rows: u64,
+    pub(crate) mean: f32,
+    pub(crate) variance: f32,
+    pub(crate) ml_range: (f32, f32),
+    /// Number of ML frequencies the class has (all stored: at most the capacity).
+    pub(crate) ml_len: usize,
+    pub(crate) map_range: (f32, f32),
+    /// Number of MAP frequencies the class has.
+    pub(crate) map_len: usize,
+}
+
+/// Parses the body into `sink` (the one body parser: every table, fixed-size or not,
+/// decodes through it); every byte must be used. `bayes` says whether the header
+/// announced a Bayes section.
+pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
+    body: &'a [u8],
+    bayes: bool,
+    sink: &mut S,
+) -> Result<Parsed, DecodeError> {
+    let malformed = |_| DecodeError::Malformed;
+    let mut de = postcard::Deserializer::from_bytes(body);
+    // A struct is its fields in order: the settings, then the class sequence.
+    let settings = SettingsWire::deserialize(&mut de).map_err(malformed)?;
+    let classes = ClassesSeed(&mut *sink)
+        .deserialize(&mut de)
+        .map_err(malformed)?;
+    let bayes = if bayes {
+        let lambda = f32::deserialize(&mut de).map_err(malformed)?;
+        let slots = sink.bayes();
+        let rows = seq_into(slots.rows, |slot: &mut u64, v: u64| *slot = v)
+            .deserialize(&mut de)
+            .map_err(malformed)?;
+        let axes = seq_into(slots.axes, |slot: &mut Axis, (lo, hi): (f32, f32)| {
+            (slot.lo, slot.hi) = (lo, hi);
+        })
+        .deserialize(&mut de)
+        .map_err(malformed)?;
+        let terms = seq_into(slots.terms, store)
+            .deserialize(&mut de)
+            .map_err(malformed)?;
+        Some((lambda, [rows, axes, terms]))
+    } else {
+        None
+    };
+    let rest = de.finalize().map_err(malformed)?;
+    if !rest.is_empty() {
+        return Err(DecodeError::Malformed);
+    }
+    Ok(Parsed {
+        settings: settings.to_settings()?,
+        classes,
+        bayes,
+    })
+}
+
+/// A sequence of `V`, stored through `set` into the slots of a slice; its value is the
+/// length of the sequence. A sequence longer than the slice is an error.
+struct SeqInto<'s, T, V, F>(&'s mut [T], F, core::marker::PhantomData<fn() -> V>);
+
+/// A [`SeqInto`] storing each parsed `V` into a slot of `slots` through `set`.
+fn seq_into<T, V, F: FnMut(&mut T, V)>(slots: &mut [T], set: F) -> SeqInto<'_, T, V, F> {
+    SeqInto(slots, set, core::marker::PhantomData)
+}
+
+impl<'de, T, V: Deserialize<'de>, F: FnMut(&mut T, V)> DeserializeSeed<'de>
+    for SeqInto<'_, T, V, F>
+{
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de, T, V: Deserialize<'de>, F: FnMut(&mut T, V)> Visitor<'de> for SeqInto<'_, T, V, F> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let SeqInto(slots, mut set, _) = self;
+        let mut n = 0;
+        while let Some(v) = seq.next_element::<V>()? {
+            match slots.get_mut(n) {
+                Some(slot) => set(slot, v),
+                None => return Err(A::Error::invalid_length(n + 1, &"a shorter sequence")),
+            }
+            n += 1;
+        }
+        Ok(n)
+    }
+}
+
+/// The class sequence, into a [`BodySink`]; its value is the number of classes.
+struct ClassesSeed<'s, S>(&'s mut S);
+
+impl<'de, S: BodySink<'de>> DeserializeSeed<'de> for ClassesSeed<'_, S> {
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de, S: BodySink<'de>> Visitor<'de> for ClassesSeed<'_, S> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence of classes")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let mut class = 0;
+        while class < self.0.capacity() {
+            let seed = ClassSeed {
+                sink: &mut *self.0,
+                class,
+            };
+            match seq.next_element_seed(seed)? {
+                Some(()) => class += 1,
+                None => return Ok(class),
+            }
+        }
+        // Full: any further class is one too many.
+        match seq.size_hint() {
+            Some(0) => Ok(class),
+            _ => Err(A::Error::invalid_length(class + 1, &self)),
+        }
+    }
+}
+
+/// One class, into a [`BodySink`] (the fields of [`ClassWire`], in order).
+struct ClassSeed<'s, S> {
+    sink: &'s mut S,
+    class: usize,
+}
+
+/// The number of fields of [`ClassWire`].
+const CLASS_FIELDS: usize = 10;
+
+impl<'de, S: BodySink<'de>> DeserializeSeed<'de> for ClassSeed<'_, S> {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        // What the derived `Deserialize` of a struct asks for; postcard reads the
+        // fields in order.
+        d.deserialize_tuple(CLASS_FIELDS, self)
+    }
+}
+
+impl<'de, S: BodySink<'de>> Visitor<'de> for ClassSeed<'_, S> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a class")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let mut field = 0;
+        let mut next = |seq: &mut A| -> Result<f32, A::Error> {
+            field += 1;
+            seq.next_element()?
+                .ok_or_else(|| A::Error::invalid_length(field, &"a class"))
+        };
+        let name: &'de str = seq
+            .next_element()?
+            .ok_or_else(|| A::Error::invalid_length(0, &"a class"))?;
+        let rows: u64 = seq
+            .next_element()?
+            .ok_or_else(|| A::Error::invalid_length(1, &"a class"))?;
+        let (mean, variance) = (next(&mut seq)?, next(&mut seq)?);
+        let ml_range = (next(&mut seq)?, next(&mut seq)?);
+        let ml_len = seq
+            .next_element_seed(seq_into(self.sink.freqs(self.class, Head::Ml), store))?
+            .ok_or_else(|| A::Error::invalid_length(6, &"a class"))?;
+        let map_range = (next(&mut seq)?, next(&mut seq)?);
+        let map_len = seq
+            .next_element_seed(seq_into(self.sink.freqs(self.class, Head::Map), store))?
+            .ok_or_else(|| A::Error::invalid_length(9, &"a class"))?;
+        self.sink.class(
+            self.class,
+            ClassFields {
+                name,
+                rows,
+                mean,
+                variance,
+                ml_range,
+                ml_len,
+                map_range,
+                map_len,
+            },
+        );
+        Ok(())
+    }
+}
+
+/// Stores one parsed `f32`.
+fn store(slot: &mut f32, v: f32) {
+    *slot = v;
+}
+
