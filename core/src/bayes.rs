@@ -136,11 +136,18 @@ impl<'a> BayesView<'a> {
         if logits.len() != k || out.len() != k || scratch.len() != self.categories() {
             return Err(InferError::Length);
         }
+        // A validated head has K >= 2 logits and B >= 1 bins. Saying so here also shows
+        // the compiler that the chunk sizes below are not 0 (`chunks_exact(0)` panics),
+        // which keeps the inference free of panic paths.
+        let per_category = match k.checked_mul(b) {
+            Some(n) if n > 0 && b > 0 => n,
+            _ => return Err(InferError::Length),
+        };
         let mut max = f32::NEG_INFINITY;
         for ((l, &prior), cat_terms) in scratch
             .iter_mut()
             .zip(self.log_prior)
-            .zip(self.terms.chunks_exact(k * b))
+            .zip(self.terms.chunks_exact(per_category))
         {
             let mut sum = prior;
             for ((axis, &x), logit_terms) in
