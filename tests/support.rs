@@ -276,8 +276,7 @@ impl RawBayes {
         }
     }
 
-    /// Sets the `b` log-terms of category `c` and logit `j` (4 bins, K = 3) from
-    /// frequencies.
+    /// Sets the 4 log-terms of category `c` and logit `j` (K = 3) from frequencies.
     pub fn set_freqs(&mut self, c: usize, j: usize, freqs: [f64; 4]) {
         let start = (c * 3 + j) * 4;
         for (t, h) in self.terms[start..start + 4].iter_mut().zip(freqs) {
