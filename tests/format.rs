@@ -851,6 +851,12 @@ fn each_broken_bayes_invariant_has_its_error() {
             Invalid(Lambda { head }),
         );
     }
+    // The message names the Bayes head's own limit.
+    assert_eq!(Lambda { head }.to_string(), "Bayes lambda is not in (0, 1]");
+    assert_eq!(
+        Lambda { head: Head::Ml }.to_string(),
+        "ML lambda is not in (0, 1000000]"
+    );
     // Every category needs rows, and the rows must not overflow.
     for c in 0..4u16 {
         assert_bayes_broken(
