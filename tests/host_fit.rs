@@ -62,6 +62,29 @@ fn linspace_fit_of_train_csv_equals_the_numpy_reference_byte_for_byte() {
 }
 
 #[test]
+fn default_fit_with_the_bayes_head_equals_the_numpy_reference_byte_for_byte() {
+    // tests/golden/train_bayes.mlmap was written by the independent numpy fit, every
+    // head with the defaults of `mlmap fit` (format version 2):
+    //   python3 tools/mlmap_ref.py fit examples/data/train.csv tests/golden/train_bayes.mlmap
+    let golden = std::fs::read(repo("tests/golden/train_bayes.mlmap")).unwrap();
+    assert_eq!(&golden[4..5], [2], "a version-2 file");
+    let params = FitParams::default();
+    let table = fit(&train(), &params).unwrap();
+    assert_eq!(table.to_vec().unwrap(), golden);
+    let set = TrainingSet::read(&train()).unwrap();
+    assert_eq!(set.fit(&params).unwrap(), table);
+    // Background rows make a fourth category; its prior is their share of the rows.
+    let bayes = table.bayes().unwrap();
+    assert_eq!(bayes.all_rows(), [11159, 1668, 3173, 4000]);
+    assert_eq!((bayes.bins(), bayes.lambda()), (22, 1e-3));
+    // Without the Bayes head, the same fit is the version-1 golden table.
+    assert_eq!(
+        table.without_bayes().to_vec().unwrap(),
+        std::fs::read(repo("tests/golden/train_linspace.mlmap")).unwrap()
+    );
+}
+
+#[test]
 fn the_shipped_default_table_is_the_fit_of_the_shipped_training_data() {
     // tables/default.mlmap (embedded by build.rs unless MLMAP_TABLE says otherwise) is
     //   mlmap fit --train examples/data/train.csv --output tables/default.mlmap

@@ -1,40 +1,75 @@
 //! The layer against the numpy reference, its error cases, the batch API and the exact
-//! "I don't know" answer (DESIGN §1.2, §1.3).
+//! "I don't know" answer (DESIGN §1.2, §1.3, §1.6).
 
-use mlmap::{BatchError, InferError, Scores, Table, UpperTail};
+use mlmap::{BatchError, InferError, Libm, Scores, Table, UpperTail};
 
 use crate::support::{
-    goldens, shipped, small, small_clamp, small_settings, small_specs, Golden, Shipped, Small,
-    GOLDEN_ABS_TOL, SHIPPED_CSV, SMALL_CSV,
+    goldens, shipped, small, small_bayes, small_bayes_nobg, small_clamp, small_settings,
+    small_specs, Golden, Shipped, Small, GOLDEN_ABS_TOL, SHIPPED_CSV, SMALL_CSV,
 };
 
-/// Checks one golden row against `table`; returns the largest score error seen.
+/// Bayes scores of one detection through the table's view (so that the same code
+/// serves table types with and without the head).
+fn bayes_of<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
+    table: &Table<3, BM, BP, BB, C>,
+    logits: &[f32; 3],
+    objectness: f32,
+) -> Result<[f32; 3], InferError> {
+    let mut out = [0.0f32; 3];
+    let mut scratch = [0.0f32; C];
+    table
+        .view()
+        .bayes_into::<Libm>(logits, objectness, &mut out, &mut scratch)?;
+    Ok(out)
+}
+
+/// Checks one golden row against `table` (every head it has); returns the largest
+/// score error seen, ML / MAP and Bayes.
 fn check_golden<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
     table: &Table<3, BM, BP, BB, C>,
     g: &Golden,
-) -> f64 {
+) -> (f64, f64) {
     let what = format!(
         "{} / {} / logits {:?} / objectness {}",
         g.table, g.case, g.logits, g.objectness
     );
     let ml = table.ml(&g.logits, g.objectness);
     let map = table.map(&g.logits, g.objectness);
+    let bayes = bayes_of(table, &g.logits, g.objectness);
     let (Some(want_ml), Some(want_map)) = (g.ml, g.map) else {
         let want = g.error.expect("a golden row holds scores or an error");
         assert_eq!(ml, Err(want), "ML: {what}");
         assert_eq!(map, Err(want), "MAP: {what}");
-        return 0.0;
+        if BB > 0 {
+            assert_eq!(bayes, Err(want), "Bayes: {what}");
+        }
+        return (0.0, 0.0);
     };
-    let mut worst = 0.0f64;
-    for (head, got, want) in [("ML", ml, want_ml), ("MAP", map, want_map)] {
+    let mut worst = (0.0f64, 0.0f64);
+    let heads = [
+        ("ML", ml.map(|s| s.0), Some(want_ml)),
+        ("MAP", map.map(|s| s.0), Some(want_map)),
+        ("Bayes", bayes, g.bayes),
+    ];
+    for (head, got, want) in heads {
+        let Some(want) = want else {
+            // No Bayes scores in the golden file: the table has no Bayes head.
+            assert_eq!(got, Err(InferError::NoBayesHead), "{head}: {what}");
+            assert_eq!(BB, 0, "{what}: the golden file has no Bayes scores");
+            continue;
+        };
         let got = got.unwrap_or_else(|e| panic!("{head}: {what}: unexpected {e:?}"));
-        for (i, (&s, &w)) in got.0.iter().zip(&want).enumerate() {
+        for (i, (&s, &w)) in got.iter().zip(&want).enumerate() {
             let err = (f64::from(s) - w).abs();
             assert!(
                 err <= GOLDEN_ABS_TOL,
                 "{head} score {i}: {what}: got {s}, want {w} (error {err:e} > {GOLDEN_ABS_TOL:e})"
             );
-            worst = worst.max(err);
+            if head == "Bayes" {
+                worst.1 = worst.1.max(err);
+            } else {
+                worst.0 = worst.0.max(err);
+            }
         }
     }
     worst
@@ -43,22 +78,32 @@ fn check_golden<const BM: usize, const BP: usize, const BB: usize, const C: usiz
 #[test]
 fn small_tables_match_the_numpy_reference() {
     let (plain, clamp) = (small(), small_clamp());
-    let mut worst = 0.0f64;
+    let (with_bg, no_bg) = (small_bayes(), small_bayes_nobg());
+    let mut worst = (0.0f64, 0.0f64);
     let rows = goldens(SMALL_CSV);
     for g in &rows {
-        let table = match g.table.as_str() {
-            "small" => &plain,
-            "small_clamp" => &clamp,
+        let w = match g.table.as_str() {
+            "small" => check_golden(&plain, g),
+            "small_clamp" => check_golden(&clamp, g),
+            "small_bayes" => check_golden(&with_bg, g),
+            "small_bayes_nobg" => check_golden(&no_bg, g),
             other => panic!("unknown golden table {other}"),
         };
-        worst = worst.max(check_golden(table, g));
+        worst = (worst.0.max(w.0), worst.1.max(w.1));
     }
-    // Both tables, every case, including the error cases.
+    // Every table, every case, including the error cases.
     assert!(rows.iter().any(|g| g.error.is_some()));
-    assert!(rows.iter().any(|g| g.table == "small_clamp"));
+    for table in ["small_clamp", "small_bayes", "small_bayes_nobg"] {
+        assert!(rows.iter().any(|g| g.table == table), "{table}");
+    }
+    let bayes_rows = rows.iter().filter(|g| g.bayes.is_some()).count();
+    assert!(bayes_rows >= 100, "{bayes_rows} rows with Bayes scores");
     eprintln!(
-        "small tables: {} golden rows, worst score error {worst:e}",
-        rows.len()
+        "small tables: {} golden rows ({bayes_rows} with Bayes scores), worst score error \
+         ML/MAP {:e}, Bayes {:e}",
+        rows.len(),
+        worst.0,
+        worst.1
     );
 }
 
@@ -66,11 +111,13 @@ fn small_tables_match_the_numpy_reference() {
 fn shipped_table_matches_the_numpy_reference() {
     let decoded = shipped();
     let rows = goldens(SHIPPED_CSV);
-    assert!(rows.len() >= 300);
-    let mut worst = 0.0f64;
+    assert!(rows.len() >= 500);
+    assert!(rows.iter().filter(|g| g.bayes.is_some()).count() >= 400);
+    let mut worst = (0.0f64, 0.0f64);
     for g in &rows {
         assert_eq!(g.table, "default");
-        worst = worst.max(check_golden(&decoded, g));
+        let w = check_golden(&decoded, g);
+        worst = (worst.0.max(w.0), worst.1.max(w.1));
         // The table embedded at build time gives the very same bits.
         let embedded = &mlmap::embedded::TABLE;
         if g.error.is_none() {
@@ -82,11 +129,17 @@ fn shipped_table_matches_the_numpy_reference() {
                 embedded.map(&g.logits, g.objectness),
                 decoded.map(&g.logits, g.objectness)
             );
+            assert_eq!(
+                bayes_of(embedded, &g.logits, g.objectness),
+                bayes_of(&decoded, &g.logits, g.objectness)
+            );
         }
     }
     eprintln!(
-        "shipped table: {} golden rows, worst score error {worst:e}",
-        rows.len()
+        "shipped table: {} golden rows, worst score error ML/MAP {:e}, Bayes {:e}",
+        rows.len(),
+        worst.0,
+        worst.1
     );
 }
 
@@ -119,6 +172,141 @@ fn small_table_by_hand() {
     );
 }
 
+/// The small Bayes heads by hand, with products instead of the layer's sums of logs:
+/// `p[c]` is proportional to `pi[c] * prod_j (h[c][j](x_j) + lambda)` (DESIGN §1.6).
+#[test]
+fn small_bayes_by_hand() {
+    // x = (3, 0.5, -3.5): logit 0 in [2, 4] (bin 3), logit 1 in [0, 1) (bin 2), logit 2
+    // in [-4, -3) (bin 0). Priors 40, 20, 20, 20 rows of 100; lambda 0.01.
+    let car = 0.4 * 0.61 * 0.21 * 0.21; // 0.0107604
+    let cyclist = 0.2 * 0.11 * 0.31 * 0.31; // 0.0021142
+    let pedestrian = 0.2 * 0.11 * 0.26 * 0.01; // 0.0000572
+    let background = 0.2 * 0.21 * 0.31 * 0.11; // 0.0014322
+    let total: f64 = car + cyclist + pedestrian + background;
+    let s = small_bayes().bayes(&[3.0, 0.5, -3.5], 1.0).unwrap();
+    for (got, want) in
+        s.0.iter()
+            .zip([car / total, cyclist / total, pedestrian / total])
+    {
+        assert!((f64::from(*got) - want).abs() < GOLDEN_ABS_TOL, "{s:?}");
+    }
+    assert!((f64::from(s.0[0]) - 0.749_122_8).abs() < 1e-6, "{s:?}");
+    // The background share is not a class score: the scores sum to 1 - 0.0997...
+    let sum: f64 = s.0.iter().map(|&v| f64::from(v)).sum();
+    assert!((sum - (1.0 - background / total)).abs() < 1e-6, "{sum}");
+    // Without background (40, 20, 20 rows; lambda 0.001) and at objectness 0.5.
+    let car = 0.5 * 0.601 * 0.201 * 0.201;
+    let cyclist = 0.25 * 0.101 * 0.301 * 0.301;
+    let pedestrian = 0.25 * 0.101 * 0.251 * 0.001;
+    let total: f64 = car + cyclist + pedestrian;
+    let s = small_bayes_nobg().bayes(&[3.0, 0.5, -3.5], 0.5).unwrap();
+    for (got, want) in s.0.iter().zip([car, cyclist, pedestrian]) {
+        assert!(
+            (f64::from(*got) - 0.5 * want / total).abs() < GOLDEN_ABS_TOL,
+            "{s:?}"
+        );
+    }
+}
+
+/// `OS * pi[c]`, the Bayes answer for a detection outside every axis, from the table's
+/// row counts (in f64).
+fn os_times_prior(rows: &[u64], objectness: f32) -> [f64; 3] {
+    let total: u64 = rows.iter().sum();
+    std::array::from_fn(|c| f64::from(objectness) * rows[c] as f64 / total as f64)
+}
+
+/// DESIGN §1.6: a detection whose every logit is outside its axis gets `OS * pi[c]`;
+/// objectness 0 gives exactly 0 everywhere.
+#[test]
+fn bayes_outside_every_axis_is_os_times_prior() {
+    fn run<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
+        t: &Table<3, BM, BP, BB, C>,
+    ) -> usize {
+        let head = t.bayes_head().expect("a Bayes head");
+        let rows = head.all_rows().to_vec();
+        let inf = f32::INFINITY;
+        let below: [f32; 3] = std::array::from_fn(|j| head.axis(j).unwrap().lo().next_down());
+        let above: [f32; 3] = std::array::from_fn(|j| head.axis(j).unwrap().hi().next_up());
+        let outside = [
+            below,
+            above,
+            [below[0], above[1], below[2]],
+            [inf, -inf, inf],
+            [-inf; 3],
+            [f32::MAX, f32::MIN, 1e30],
+        ];
+        let mut checked = 0;
+        for os in objectness_values() {
+            let want = os_times_prior(&rows, os);
+            for x in &outside {
+                let got = bayes_of(t, x, os).unwrap();
+                for (g, w) in got.iter().zip(want) {
+                    assert!(
+                        (f64::from(*g) - w).abs() <= GOLDEN_ABS_TOL,
+                        "{x:?} OS {os}: {got:?}, want {want:?}"
+                    );
+                }
+                if os == 0.0 {
+                    assert_eq!(got, [0.0; 3], "{x:?}");
+                }
+                checked += 1;
+            }
+        }
+        checked
+    }
+    let n = run(&shipped()) + run(&small_bayes()) + run(&small_bayes_nobg());
+    assert_eq!(n, 3 * 6 * objectness_values().len());
+}
+
+/// DESIGN §1.6: scores are finite in `[0, OS]`; they sum to `OS` without a background
+/// category and to less with one (by the background's share).
+#[test]
+fn bayes_scores_sum_to_os_without_background_and_less_with() {
+    let rows = goldens(SMALL_CSV)
+        .into_iter()
+        .chain(goldens(SHIPPED_CSV))
+        .filter(|g| g.error.is_none());
+    let (with_bg, no_bg, shipped) = (small_bayes(), small_bayes_nobg(), shipped());
+    let mut below = 0;
+    for g in rows {
+        let (x, os) = (g.logits, g.objectness);
+        let (got, background) = match g.table.as_str() {
+            "small_bayes_nobg" => (bayes_of(&no_bg, &x, os).unwrap(), false),
+            "small_bayes" => (bayes_of(&with_bg, &x, os).unwrap(), true),
+            "default" => (bayes_of(&shipped, &x, os).unwrap(), true),
+            _ => continue,
+        };
+        let os64 = f64::from(os);
+        let sum: f64 = got.iter().map(|&v| f64::from(v)).sum();
+        assert!(
+            got.iter().all(|&v| v.is_finite() && v >= 0.0 && v <= os),
+            "{g:?}"
+        );
+        // As in the invariant tests: below OS ~ 1e-39 each f32 score carries up to one
+        // smallest subnormal of rounding.
+        let floor = 3.0 * f64::from(f32::from_bits(1));
+        if background {
+            assert!(
+                sum <= os64 * (1.0 + mlmap::invariants::SUM_RELATIVE_TOLERANCE) + floor,
+                "{g:?}: {sum}"
+            );
+            // Where numpy's background share is visible in f32 (and OS is not so small
+            // that rounding is absolute), the sum is below OS.
+            let want: f64 = g.bayes.unwrap().iter().sum();
+            if os64 - want > 1e-5 * os64 && os >= f32::MIN_POSITIVE {
+                assert!(sum < os64, "{g:?}: {sum}");
+                below += 1;
+            }
+        } else {
+            assert!(
+                (sum - os64).abs() <= mlmap::invariants::SUM_RELATIVE_TOLERANCE * os64 + floor,
+                "{g:?}: {sum}"
+            );
+        }
+    }
+    assert!(below > 100, "{below} rows with a visible background share");
+}
+
 #[test]
 fn error_cases() {
     let t = shipped();
@@ -136,11 +324,17 @@ fn error_cases() {
             let want = Err(InferError::NanLogit { class });
             assert_eq!(t.ml(&x, 0.5), want, "{x:?}");
             assert_eq!(t.map(&x, 0.5), want, "{x:?}");
+            assert_eq!(t.bayes(&x, 0.5), want, "{x:?}");
+            // Also with every other logit outside its axis.
+            let mut far = [1e30f32; 3];
+            far[usize::from(class)] = nan;
+            assert_eq!(t.bayes(&far, 0.5), want, "{far:?}");
         }
         // The first NaN is reported.
         let want = Err(InferError::NanLogit { class: 1 });
         assert_eq!(t.ml(&[0.0, nan, nan], 1.0), want);
         assert_eq!(t.map(&[0.0, nan, nan], 1.0), want);
+        assert_eq!(t.bayes(&[0.0, nan, nan], 1.0), want);
     }
     let bad_objectness = [
         f32::NAN,
@@ -164,15 +358,27 @@ fn error_cases() {
             Err(InferError::Objectness),
             "{os}"
         );
+        assert_eq!(
+            t.bayes(&[1.0, -2.0, 0.5], os),
+            Err(InferError::Objectness),
+            "{os}"
+        );
     }
     // Both wrong: an error either way, never scores.
     assert!(t.ml(&[f32::NAN; 3], f32::NAN).is_err());
     assert!(t.map(&[f32::NAN; 3], 2.0).is_err());
+    assert!(t.bayes(&[f32::NAN; 3], -1.0).is_err());
     // The edges of [0, 1] themselves are valid, -0.0 included.
     for os in [0.0, -0.0, 1.0, f32::from_bits(1), 1.0f32.next_down()] {
         assert!(t.ml(&[1.0, -2.0, 0.5], os).is_ok(), "{os}");
         assert!(t.map(&[1.0, -2.0, 0.5], os).is_ok(), "{os}");
+        assert!(t.bayes(&[1.0, -2.0, 0.5], os).is_ok(), "{os}");
     }
+    // A table without a Bayes head says so through the view.
+    assert_eq!(
+        bayes_of(&small(), &[1.0, -2.0, 0.5], 1.0),
+        Err(InferError::NoBayesHead)
+    );
 }
 
 /// Logit rows for the batch tests: valid, valid, NaN, valid.
@@ -198,11 +404,14 @@ fn batch_matches_single_calls() {
     let os = [0.9, 0.0, 1.0];
     let mut ml = [SENTINEL; 3];
     let mut map = [SENTINEL; 3];
+    let mut bayes = [SENTINEL; 3];
     t.ml_batch(&rows, Some(&os), &mut ml).unwrap();
     t.map_batch(&rows, Some(&os), &mut map).unwrap();
+    t.bayes_batch(&rows, Some(&os), &mut bayes).unwrap();
     for r in 0..3 {
         assert_eq!(ml[r], t.ml(&rows[r], os[r]).unwrap().0, "row {r}");
         assert_eq!(map[r], t.map(&rows[r], os[r]).unwrap().0, "row {r}");
+        assert_eq!(bayes[r], t.bayes(&rows[r], os[r]).unwrap().0, "row {r}");
     }
     // No objectness: 1.0 for every row.
     t.ml_batch(&rows, None, &mut ml).unwrap();
@@ -221,9 +430,10 @@ fn batch_row_error_writes_earlier_rows_only() {
     let t = shipped();
     let rows = batch_rows();
     type Run = fn(&Shipped, &[[f32; 3]], Option<&[f32]>, &mut [[f32; 3]]) -> Result<(), BatchError>;
-    let heads: [(&str, Run); 2] = [
+    let heads: [(&str, Run); 3] = [
         ("ML", |t, x, o, out| t.ml_batch(x, o, out)),
         ("MAP", |t, x, o, out| t.map_batch(x, o, out)),
+        ("Bayes", |t, x, o, out| t.bayes_batch(x, o, out)),
     ];
     for (head, run) in heads {
         let mut out = [SENTINEL; 4];
@@ -237,7 +447,8 @@ fn batch_row_error_writes_earlier_rows_only() {
         );
         let single = |x: &[f32; 3], os| match head {
             "ML" => t.ml(x, os).unwrap().0,
-            _ => t.map(x, os).unwrap().0,
+            "MAP" => t.map(x, os).unwrap().0,
+            _ => t.bayes(x, os).unwrap().0,
         };
         assert_eq!(out[0], single(&rows[0], 1.0), "{head}");
         assert_eq!(out[1], single(&rows[1], 1.0), "{head}");
@@ -283,6 +494,10 @@ fn batch_length_mismatch_writes_nothing() {
         );
         assert_eq!(
             t.map_batch(&rows, os, &mut out),
+            Err(BatchError::LengthMismatch)
+        );
+        assert_eq!(
+            t.bayes_batch(&rows, os, &mut out),
             Err(BatchError::LengthMismatch)
         );
         assert!(out.iter().all(|r| *r == SENTINEL), "{out_len} {os:?}");
@@ -474,6 +689,10 @@ fn embedded_table_is_the_decoded_file() {
     for x in [[5.1f32, -2.0, -1.3], [0.0, 0.0, 0.0], [-3.0, 4.0, 1.0]] {
         assert_eq!(embedded::TABLE.ml(&x, 0.93), decoded.ml(&x, 0.93));
         assert_eq!(embedded::TABLE.map(&x, 0.93), decoded.map(&x, 0.93));
+        assert_eq!(
+            bayes_of(&embedded::TABLE, &x, 0.93),
+            bayes_of(&decoded, &x, 0.93)
+        );
     }
     let shape = (embedded::K, embedded::BINS_ML, embedded::BINS_MAP);
     // The bytes are those of the file the build named.
@@ -515,7 +734,7 @@ mod dyn_table {
     use mlmap::Libm;
 
     use super::*;
-    use crate::support::SHIPPED_MLMAP;
+    use crate::support::{SHIPPED_MLMAP, SMALL_BAYES_MLMAP, SMALL_BAYES_NOBG_MLMAP};
 
     fn inputs() -> Vec<([f32; 3], f32)> {
         let mut v: Vec<([f32; 3], f32)> = goldens(SHIPPED_CSV)
@@ -528,13 +747,25 @@ mod dyn_table {
         v
     }
 
+    /// Same bits from `t` and `d` for every golden input, with every head; returns the
+    /// number of inputs `t` scored with its Bayes head.
     fn agree<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
         t: &Table<3, BM, BP, BB, C>,
         d: &DynTable,
-    ) {
+    ) -> usize {
         let mut out = [0.0f32; 3];
         let mut scratch = [0.0f32; 3];
+        let mut bayes_scratch = [0.0f32; C];
+        let mut bayes = 0;
         for (x, os) in inputs() {
+            let want = bayes_of(t, &x, os).map(|s| s.map(f32::to_bits));
+            let got = d.bayes_into::<Libm>(&x, os, &mut out, &mut bayes_scratch);
+            assert_eq!(
+                got.map(|()| out.map(f32::to_bits)),
+                want,
+                "Bayes {x:?} {os}"
+            );
+            bayes += usize::from(want.is_ok());
             let want = t.ml(&x, os).map(|s| s.0.map(f32::to_bits));
             let got = d.ml_into(&x, os, &mut out, &mut scratch);
             assert_eq!(got.map(|()| out.map(f32::to_bits)), want, "ML {x:?} {os}");
@@ -542,6 +773,7 @@ mod dyn_table {
             let got = d.map_into::<Libm>(&x, os, &mut out, &mut scratch);
             assert_eq!(got.map(|()| out.map(f32::to_bits)), want, "MAP {x:?} {os}");
         }
+        bayes
     }
 
     #[test]
@@ -550,11 +782,28 @@ mod dyn_table {
         let from_bytes = DynTable::from_bytes(SHIPPED_MLMAP).unwrap();
         let from_table = DynTable::from_table(&t);
         assert_eq!(from_bytes, from_table);
-        agree(&t, &from_bytes);
-        agree(&small(), &DynTable::from_table(&small()));
+        assert!(agree(&t, &from_bytes) > 400);
+        assert_eq!(agree(&small(), &DynTable::from_table(&small())), 0);
         agree(
             &small_clamp(),
             &DynTable::from_bytes(crate::support::SMALL_CLAMP_MLMAP).unwrap(),
+        );
+        for (table, bytes) in [
+            (DynTable::from_table(&small_bayes()), SMALL_BAYES_MLMAP),
+            (
+                DynTable::from_table(&small_bayes_nobg()),
+                SMALL_BAYES_NOBG_MLMAP,
+            ),
+        ] {
+            assert_eq!(DynTable::from_bytes(bytes).unwrap(), table);
+            assert_eq!(table.to_vec().unwrap(), bytes);
+        }
+        assert!(agree(&small_bayes(), &DynTable::from_table(&small_bayes())) > 400);
+        assert!(
+            agree(
+                &small_bayes_nobg(),
+                &DynTable::from_bytes(SMALL_BAYES_NOBG_MLMAP).unwrap()
+            ) > 400
         );
         // Same bytes, and the same fixed-size table back.
         assert_eq!(from_bytes.to_vec().unwrap(), SHIPPED_MLMAP);
@@ -589,6 +838,26 @@ mod dyn_table {
         assert_eq!(
             d.map_into::<Libm>(&[0.0; 4], 1.0, &mut out, &mut scratch),
             Err(InferError::Length)
+        );
+        // The Bayes head's scratch holds one value per category (4 here).
+        let mut four = [0.0f32; 4];
+        assert!(d
+            .bayes_into::<Libm>(&[0.0; 3], 1.0, &mut out, &mut four)
+            .is_ok());
+        for (x, o, s) in [
+            (&[0.0f32; 3][..], &mut out[..], &mut scratch[..]),
+            (&[0.0; 2], &mut [0.0; 3], &mut [0.0; 4]),
+            (&[0.0; 3], &mut [0.0; 2], &mut [0.0; 4]),
+            (&[0.0; 3], &mut [0.0; 3], &mut [0.0; 5]),
+        ] {
+            assert_eq!(d.bayes_into::<Libm>(x, 1.0, o, s), Err(InferError::Length));
+        }
+        // A table without the head says so.
+        let v1 = DynTable::from_bytes(crate::support::SMALL_MLMAP).unwrap();
+        assert!(v1.bayes().is_none());
+        assert_eq!(
+            v1.bayes_into::<Libm>(&[0.0; 3], 1.0, &mut out, &mut scratch),
+            Err(InferError::NoBayesHead)
         );
     }
 }

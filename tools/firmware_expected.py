@@ -2,11 +2,13 @@
 """Writes firmware/src/expected.rs: the inputs the firmware example scores on the emulated
 Cortex-M4F and the scores it must get, computed here in float64.
 
-This shares no code with the Rust crate: the table file is decoded here from
-docs/FORMAT.md (and checked by re-encoding it with tools/mlmap_ref.py), bins are found by
-comparing against the float32 edges the format defines, and ML and MAP are evaluated in
-float64 from docs/DESIGN.md §1.2. The firmware checks its float32 results against these
-values within a tolerance, and exactly where the answer is `OS / K`.
+This shares no code with the Rust crate: the table file (format version 2, with a Bayes
+head) is decoded here from docs/FORMAT.md (and checked by re-encoding it with
+tools/mlmap_ref.py), bins are found by comparing against the float32 edges the format
+defines, and ML and MAP are evaluated in float64 from docs/DESIGN.md §1.2. The Bayes head's
+scores come from the numpy reference (`mlmap_ref.bayes`, docs/DESIGN.md §1.6, float64). The
+firmware checks its float32 results against these values within a tolerance, and exactly
+where the answer is `OS / K`.
 
     python3 tools/firmware_expected.py [TABLE] [OUT]     # defaults: tables/default.mlmap,
                                                          #           firmware/src/expected.rs
@@ -67,7 +69,7 @@ class Reader:
 
 
 def decode(data):
-    """The table as a dict, from the bytes of a version-1 `.mlmap` file."""
+    """The table as a dict, from the bytes of a version-2 `.mlmap` file."""
     body, crc = data[:-4], struct.unpack("<I", data[-4:])[0]
     if zlib.crc32(body) & 0xFFFFFFFF != crc:
         raise ValueError("CRC mismatch")
@@ -75,8 +77,10 @@ def decode(data):
     if r.take(4) != mlmap_ref.MAGIC:
         raise ValueError("not a table")
     version, k, bins_ml, bins_map = (r.varint() for _ in range(4))
-    if version != mlmap_ref.VERSION:
-        raise ValueError(f"format version {version}")
+    if version != mlmap_ref.VERSION_2:
+        raise ValueError(f"format version {version}: the firmware checks a table with a "
+                         "Bayes head (version 2)")
+    bins_bayes, categories = r.varint(), r.varint()
     edge_mode, upper_tail = r.u8(), r.u8()
     lambda_ml, lambda_map = r.f32(), r.f32()
     if r.varint() != k:
@@ -94,15 +98,24 @@ def decode(data):
         classes.append(dict(name=name, rows=rows, mean=mean, var=var,
                             ml_lo=ml_lo, ml_hi=ml_hi, ml_freqs=ml_freqs,
                             map_lo=map_lo, map_hi=map_hi, map_freqs=map_freqs))
+    bayes = {"lambda": r.f32(), "bins": bins_bayes}
+    bayes["rows"] = [r.varint() for _ in range(r.varint())]
+    bayes["ranges"] = [(r.f32(), r.f32()) for _ in range(r.varint())]
+    # Stored logit-major (logit, bin, category); held category-major as in mlmap_ref.
+    stored = [r.f32() for _ in range(r.varint())]
+    bayes["terms"] = list(np.asarray(stored, dtype=np.float32)
+                          .reshape(k, bins_bayes, categories).transpose(2, 0, 1).ravel())
+    assert len(bayes["rows"]) == categories and len(bayes["ranges"]) == k
+    assert len(bayes["terms"]) == categories * k * bins_bayes
     if r.pos != len(body):
         raise ValueError("trailing bytes")
     # The decoder and the independent encoder must agree byte for byte.
-    again = mlmap_ref.encode(classes, lambda_ml, lambda_map, edge_mode, upper_tail)
+    again = mlmap_ref.encode(classes, lambda_ml, lambda_map, edge_mode, upper_tail, bayes)
     if again != bytes(data):
         raise ValueError("re-encoding the decoded table gives other bytes")
     return dict(k=k, bins_ml=bins_ml, bins_map=bins_map, edge_mode=edge_mode,
                 upper_tail=upper_tail, lambda_ml=lambda_ml, lambda_map=lambda_map,
-                classes=classes, crc=crc)
+                classes=classes, bayes=bayes, crc=crc)
 
 
 def likelihood(x, lo, hi, freqs, upper_tail):
@@ -142,6 +155,11 @@ def layer(table, logits, os_):
         total = sum(v + lam for v in a)
         out.append(([os_ * (v + lam) / total for v in a], uniform))
     return out
+
+
+def bayes_scores(table, logits, os_):
+    """float64 Bayes scores from the numpy reference (mlmap_ref.bayes)."""
+    return [float(v) for v in mlmap_ref.bayes(table, [float(x) for x in logits], float(os_))]
 
 
 def argmax(scores):
@@ -195,6 +213,23 @@ def cases(table):
     for os_ in (0.0, 1.0, 0.37, 1e-6):
         add(f"objectness {os_}", [c["mean"] for c in cls], os_)
     add("objectness 0, outside every support", [far] * k, 0.0)
+    b = table["bayes"]
+    bayes_edges = [mlmap_ref.edges_f32(lo, hi, b["bins"]) for lo, hi in b["ranges"]]
+    for i in (0, b["bins"] // 2, b["bins"] - 1):
+        add(f"inside Bayes bin {i} of every logit",
+            [(e[i] + e[i + 1]) / 2 for e in bayes_edges], 1.0)
+    for i in (1, b["bins"] // 3):
+        add(f"on inner Bayes edge {i} of every logit", [e[i] for e in bayes_edges], 0.9)
+    add("on the first Bayes edge of every logit", [e[0] for e in bayes_edges], 1.0)
+    add("on the closed last Bayes edge of every logit", [e[-1] for e in bayes_edges], 0.8)
+    add("one ulp outside every Bayes axis",
+        [np.nextafter(e[-1] if i % 2 else e[0], f(np.inf) if i % 2 else f(-np.inf))
+         for i, e in enumerate(bayes_edges)], 1.0)
+    add("one ulp outside every Bayes axis, objectness 0.25",
+        [np.nextafter(e[-1], f(np.inf)) for e in bayes_edges], 0.25)
+    mid = [(e[b["bins"] // 2] + e[b["bins"] // 2 + 1]) / 2 for e in bayes_edges]
+    add("logit 0 below its Bayes axis, others inside",
+        [np.nextafter(bayes_edges[0][0], f(-np.inf))] + mid[1:], 1.0)
     with open(TEST_CSV) as fh:
         for row in list(csv.DictReader(fh))[:CSV_ROWS]:
             add(f"test.csv id {row['id']} ({row['label']})",
@@ -257,11 +292,12 @@ def render(table, source):
         "/// CRC-32 of the table the values were computed from (its last four bytes).",
         f"pub const TABLE_CRC: u32 = 0x{table['crc']:08x};",
         "",
-        "/// Valid detections and their float64 ML and MAP scores.",
+        "/// Valid detections and their float64 ML, MAP and Bayes scores.",
         "pub static CASES: &[Case<K>] = &[",
     ]
     for label, logits, os_ in cases(table):
         (ml, ml_uniform), (mp, map_uniform) = layer(table, logits, os_)
+        bayes = bayes_scores(table, logits, os_)
         # No evidence in a head: every score is exactly OS / K in float32.
         share = np.float32(os_) / np.float32(k)
         if ml_uniform:
@@ -282,6 +318,11 @@ def render(table, source):
             f"            scores: [{', '.join(lit64(v) for v in mp)}],",
             f"            uniform: {str(map_uniform).lower()},",
             f"            argmax: {rust_opt(argmax(mp))},",
+            "        },",
+            "        bayes: Expect {",
+            f"            scores: [{', '.join(lit64(v) for v in bayes)}],",
+            "            uniform: false,",
+            f"            argmax: {rust_opt(argmax(bayes))},",
             "        },",
             "    },",
         ]

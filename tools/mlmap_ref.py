@@ -5,15 +5,25 @@ It shares no code with the Rust crate: it is written from docs/DESIGN.md and doc
 so agreement between the two is evidence for both. Used to write golden values
 (tests/golden/) and to cross-check tables written by `mlmap fit`.
 
-    python3 tools/mlmap_ref.py fit examples/data/train.csv OUT.mlmap   # linspace, 22/17 bins
+    python3 tools/mlmap_ref.py fit examples/data/train.csv OUT.mlmap   # every head (version 2)
+    python3 tools/mlmap_ref.py fit --no-bayes examples/data/train.csv OUT.mlmap  # version 1
     python3 tools/mlmap_ref.py goldens tests/golden/layer              # layer goldens
+
+`fit` uses the defaults of `mlmap fit`: linspace edges, 22 ML bins (lambda 0.0055), 17 MAP
+bins (lambda 0.00012) and, unless --no-bayes, the Bayes head of docs/DESIGN.md section 1.6 with
+22 bins per logit and lambda 0.001.
 
 The layer half (decode, likelihood, prior, ML, MAP) follows docs/DESIGN.md section 1.2 in
 float64: the table's stored float32 values are widened exactly, the inner bin edges are
 computed in float32 exactly as the format defines them (w = (hi - lo) / B,
 e_k = lo + k * w, no fused multiply-add), and the bin of a logit is found by
-numpy.histogram itself (bins [e_k, e_k+1), the last one closed). Goldens were last
-written with numpy 2.4.6 (the version is also recorded in every golden file).
+numpy.histogram itself (bins [e_k, e_k+1), the last one closed). The Bayes head
+(DESIGN.md section 1.6) is fitted and scored the same way: its axes are linspace edges over
+all labelled rows, its counts come from numpy.histogram on the float32 edges, its log-terms
+are float32(ln(count / n_c + lambda)) computed in float64, and a detection is scored in
+float64 as l[c] = ln pi[c] + sum_j term (ln(lambda) outside axis j), softmax over the
+categories, times the objectness. Goldens were last written with numpy 2.4.6 (the version
+is also recorded in every golden file).
 """
 import csv
 import struct
@@ -23,7 +33,9 @@ import zlib
 import numpy as np
 
 MAGIC = b"MLMP"
-VERSION = 1
+# Version 1: ML and MAP heads only; version 2: the same plus a Bayes head.
+VERSION_1 = 1
+VERSION_2 = 2
 VARIANCE_FLOOR = 1e-12
 
 
@@ -43,13 +55,24 @@ def f32(v):
     return struct.pack("<f", float(np.float32(v)))
 
 
-def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0):
-    """classes: list of dicts name, rows, mean, var, ml_lo, ml_hi, ml_freqs, map_lo, map_hi, map_freqs."""
+def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None):
+    """The bytes of a table file (docs/FORMAT.md).
+
+    classes: list of dicts name, rows, mean, var, ml_lo, ml_hi, ml_freqs, map_lo, map_hi,
+    map_freqs. bayes: None (a version-1 file) or a dict lambda, rows (per category),
+    ranges (K (lo, hi) pairs) and terms (C*K*B log-terms, held category-major here, written
+    logit-major): a version-2
+    file.
+    """
     k = len(classes)
     bml = len(classes[0]["ml_freqs"])
     bmap = len(classes[0]["map_freqs"])
     b = bytearray(MAGIC)
-    for v in (VERSION, k, bml, bmap):
+    header = [VERSION_1 if bayes is None else VERSION_2, k, bml, bmap]
+    if bayes is not None:
+        cats = len(bayes["rows"])
+        header += [len(bayes["terms"]) // (cats * k), cats]
+    for v in header:
         b += varint(v)
     b += bytes([edge_mode, upper_tail]) + f32(lambda_ml) + f32(lambda_map)
     b += varint(k)
@@ -61,6 +84,15 @@ def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0):
         b += b"".join(f32(v) for v in c["ml_freqs"])
         b += f32(c["map_lo"]) + f32(c["map_hi"]) + varint(len(c["map_freqs"]))
         b += b"".join(f32(v) for v in c["map_freqs"])
+    if bayes is not None:
+        b += f32(bayes["lambda"])
+        b += varint(len(bayes["rows"])) + b"".join(varint(n) for n in bayes["rows"])
+        b += varint(len(bayes["ranges"]))
+        b += b"".join(f32(lo) + f32(hi) for lo, hi in bayes["ranges"])
+        # Held category-major here (c, j, b); written logit-major (j, b, c), docs/FORMAT.md.
+        cats, k = len(bayes["rows"]), len(bayes["ranges"])
+        lm = np.asarray(bayes["terms"], dtype=np.float32).reshape(cats, k, -1).transpose(1, 2, 0)
+        b += varint(lm.size) + b"".join(f32(v) for v in lm.ravel())
     b += struct.pack("<I", zlib.crc32(bytes(b)) & 0xFFFFFFFF)
     return bytes(b)
 
@@ -74,10 +106,12 @@ def edges_f32(lo, hi, nbins):
 
 
 def linspace_range(v):
-    lo, hi = float(np.min(v)), float(np.max(v))
-    if lo == hi:
-        lo, hi = lo - 0.5, hi + 0.5
-    return np.float32(lo), np.float32(hi)
+    """[min, max] in float32; widened to [min - 0.5, max + 0.5] when empty in float32."""
+    vmin, vmax = float(np.min(v)), float(np.max(v))
+    lo, hi = np.float32(vmin), np.float32(vmax)
+    if not lo < hi:
+        lo, hi = np.float32(vmin - 0.5), np.float32(vmax + 0.5)
+    return lo, hi
 
 
 def histogram(v, nbins):
@@ -98,7 +132,36 @@ def read_csv(path):
     return names, labels, x, os_
 
 
-def fit(path, bins_ml=22, bins_map=17, lambda_ml=0.0055, lambda_map=0.00012):
+def fit_bayes(names, labels, x, bins, lam):
+    """The Bayes head (DESIGN.md section 1.6) of the labelled rows, as `encode` takes it.
+
+    Categories: the classes, then `background` when some row has that label (rows without
+    a label are not used). Logit j's axis: linspace edges over logit j of every labelled
+    row. Counts per category and logit by numpy.histogram on the float32 edges; log-terms
+    float32(ln(count / n_c + lambda)) with lambda the float32 value the table stores.
+    """
+    labels = np.asarray(labels)
+    cats = list(names) + (["background"] if np.any(labels == "background") else [])
+    labelled = np.isin(labels, cats)
+    ranges = [linspace_range(x[labelled, j]) for j in range(len(names))]
+    lam64 = float(np.float32(lam))
+    rows, terms = [], []
+    for cat in cats:
+        v = x[labels == cat].astype(np.float32)
+        n = len(v)
+        if n == 0:
+            raise ValueError("category %s has no rows" % cat)
+        rows.append(n)
+        for j, (lo, hi) in enumerate(ranges):
+            counts, _ = np.histogram(v[:, j], bins=edges_f32(lo, hi, bins))
+            assert counts.sum() == n
+            terms += [np.float32(np.log(c / n + lam64)) for c in counts]
+    return dict(**{"lambda": lam}, rows=rows, ranges=ranges, terms=terms)
+
+
+def fit(path, bins_ml=22, bins_map=17, lambda_ml=0.0055, lambda_map=0.00012,
+        bins_bayes=22, lambda_bayes=1e-3, bayes=True):
+    """The table `mlmap fit` writes for the CSV file at `path`, as `encode`'s arguments."""
     names, labels, x, _ = read_csv(path)
     classes = []
     for c, name in enumerate(names):
@@ -109,7 +172,8 @@ def fit(path, bins_ml=22, bins_map=17, lambda_ml=0.0055, lambda_map=0.00012):
         classes.append(dict(name=name, rows=len(v), mean=float(np.mean(v)), var=var,
                             ml_lo=ml_lo, ml_hi=ml_hi, ml_freqs=ml_f,
                             map_lo=map_lo, map_hi=map_hi, map_freqs=map_f))
-    return classes, lambda_ml, lambda_map
+    head = fit_bayes(names, labels, x, bins_bayes, lambda_bayes) if bayes else None
+    return classes, lambda_ml, lambda_map, head
 
 
 # ---------------------------------------------------------------------------------------
@@ -144,7 +208,11 @@ class Reader:
 
 
 def decode(data):
-    """The table in a .mlmap file as a dict (float32 values widened exactly to float64)."""
+    """The table in a .mlmap file as a dict (float32 values widened exactly to float64).
+
+    Reads versions 1 and 2; `bayes` is None for a version-1 file, else a dict with the
+    header's bins and categories and the section's lambda, rows, ranges and terms.
+    """
     if data[:4] != MAGIC:
         raise ValueError("not a table")
     if zlib.crc32(data[:-4]) & 0xFFFFFFFF != struct.unpack("<I", data[-4:])[0]:
@@ -152,11 +220,15 @@ def decode(data):
     r = Reader(data[:-4])
     r.take(4)
     version, k, bml, bmap = (r.varint() for _ in range(4))
-    if version != VERSION:
+    if version not in (VERSION_1, VERSION_2):
         raise ValueError("version")
+    if version == VERSION_2:
+        bins_bayes, cats = r.varint(), r.varint()
+        if bins_bayes == 0 or cats == 0:
+            raise ValueError("a version-2 header announces an empty Bayes head")
     edge_mode, upper_tail = r.take(1)[0], r.take(1)[0]
     t = dict(k=k, bins_ml=bml, bins_map=bmap, edge_mode=edge_mode, upper_tail=upper_tail,
-             lambda_ml=r.f32(), lambda_map=r.f32(), classes=[])
+             lambda_ml=r.f32(), lambda_map=r.f32(), classes=[], bayes=None)
     if r.varint() != k:
         raise ValueError("class count")
     for _ in range(k):
@@ -164,6 +236,18 @@ def decode(data):
         c["ml_lo"], c["ml_hi"], c["ml_freqs"] = r.f32(), r.f32(), r.f32s()
         c["map_lo"], c["map_hi"], c["map_freqs"] = r.f32(), r.f32(), r.f32s()
         t["classes"].append(c)
+    if version == VERSION_2:
+        lam = r.f32()
+        rows = [r.varint() for _ in range(r.varint())]
+        ranges = [(r.f32(), r.f32()) for _ in range(r.varint())]
+        terms = r.f32s()
+        if len(rows) != cats or len(ranges) != k or len(terms) != cats * k * bins_bayes:
+            raise ValueError("Bayes shape")
+        # Stored logit-major (j, b, c); held category-major (c, j, b).
+        terms = list(np.asarray(terms, dtype=np.float32).reshape(k, bins_bayes, cats)
+                     .transpose(2, 0, 1).ravel())
+        t["bayes"] = dict(bins=bins_bayes, rows=rows, ranges=ranges, terms=terms,
+                          **{"lambda": lam})
     if r.pos != len(r.data):
         raise ValueError("trailing bytes")
     return t
@@ -226,6 +310,38 @@ def map_(t, x, os_):
     return os_ * a / a.sum()
 
 
+def axis_bin(x, lo, hi, nbins):
+    """The bin of x on the float32 edges of [lo, hi] (numpy's rule), None outside."""
+    if not np.isfinite(x):
+        return None
+    edges = edges_f32(lo, hi, nbins).astype(np.float64)
+    counts, _ = np.histogram(np.array([x], dtype=np.float64), bins=edges)
+    if counts.sum() == 0:
+        return None
+    return int(np.argmax(counts))
+
+
+def bayes_posterior(t, x):
+    """The posterior p over the Bayes categories (DESIGN.md section 1.6), float64."""
+    b = t["bayes"]
+    k, nb = t["k"], b["bins"]
+    rows = np.asarray(b["rows"], dtype=np.float64)
+    terms = np.asarray(b["terms"], dtype=np.float64).reshape(len(rows), k, nb)
+    log_lambda = np.log(np.float64(b["lambda"]))
+    l = np.log(rows / rows.sum())
+    for j, (v, (lo, hi)) in enumerate(zip(x, b["ranges"])):
+        i = axis_bin(v, lo, hi, nb)
+        l = l + (terms[:, j, i] if i is not None else log_lambda)
+    e = np.exp(l - l.max())
+    return e / e.sum()
+
+
+def bayes(t, x, os_):
+    """Bayes class scores: OS * p[c] for the K classes (the background share is dropped)."""
+    check(x, os_)
+    return os_ * bayes_posterior(t, x)[:t["k"]]
+
+
 # ---------------------------------------------------------------------------------------
 # Golden files for tests/layer.rs and tests/format.rs.
 
@@ -244,6 +360,33 @@ SMALL = [
 ]
 SMALL_LAMBDA_ML = 0.01
 SMALL_LAMBDA_MAP = 0.001
+
+# Hand-checkable Bayes heads over the small table's classes: 4 bins per logit on round
+# edges (logit 0: -4,-2,0,2,4; logit 1: -2,-1,0,1,2; logit 2: -4,-3,-2,-1,0) and, per
+# category and logit, frequencies that are counts over the category's rows.
+SMALL_BAYES_RANGES = [(-4.0, 4.0), (-2.0, 2.0), (-4.0, 0.0)]
+SMALL_BAYES_FREQS = {
+    # category: frequencies of logit 0, logit 1, logit 2
+    "car": [[0.0, 0.1, 0.3, 0.6], [0.4, 0.4, 0.2, 0.0], [0.2, 0.2, 0.3, 0.3]],
+    "cyclist": [[0.2, 0.5, 0.2, 0.1], [0.0, 0.1, 0.3, 0.6], [0.3, 0.3, 0.2, 0.2]],
+    "pedestrian": [[0.3, 0.4, 0.2, 0.1], [0.25, 0.25, 0.25, 0.25], [0.0, 0.1, 0.3, 0.6]],
+    "background": [[0.1, 0.2, 0.5, 0.2], [0.2, 0.3, 0.3, 0.2], [0.1, 0.4, 0.4, 0.1]],
+}
+
+
+def bayes_head(rows, lam, ranges=SMALL_BAYES_RANGES, freqs=SMALL_BAYES_FREQS):
+    """A Bayes head for `encode`: rows per category (the first len(rows) categories of
+    `freqs`), log-terms float32(ln(h + lambda)) computed in float64."""
+    cats = list(freqs)[:len(rows)]
+    lam64 = float(np.float32(lam))
+    terms = [np.float32(np.log(h + lam64)) for c in cats for hist in freqs[c] for h in hist]
+    return dict(**{"lambda": lam}, rows=list(rows), ranges=list(ranges), terms=terms)
+
+
+# With background (categories car 40, cyclist 20, pedestrian 20, background 20 rows), and
+# without (car 40, cyclist 20, pedestrian 20).
+SMALL_BAYES = bayes_head([40, 20, 20, 20], 0.01)
+SMALL_BAYES_NOBG = bayes_head([40, 20, 20], 0.001)
 
 
 def up(v):
@@ -298,6 +441,37 @@ SMALL_CASES = [
     ("objectness +inf", [0.5, 0.5, 0.5], INF),
 ]
 
+# Cases aimed at the small Bayes heads' axes (scored with every small table).
+BAYES_CASES = [
+    ("bayes inside bins", [3.0, 0.5, -3.5], 1.0),
+    ("bayes inside bins", [-3.0, -1.5, -0.5], 1.0),
+    ("bayes inside bins", [1.0, 1.5, -2.5], 0.8),
+    ("bayes inside zero-frequency bins", [-3.0, 1.5, -3.5], 1.0),
+    ("bayes on inner edges", [0.0, 0.0, -2.0], 1.0),
+    ("bayes on inner edges", [-2.0, -1.0, -3.0], 0.9),
+    ("bayes on inner edges", [2.0, 1.0, -1.0], 1.0),
+    ("bayes on first edges", [-4.0, -2.0, -4.0], 1.0),
+    ("bayes on closed last edges", [4.0, 2.0, 0.0], 1.0),
+    ("bayes just below inner edges", [down(2.0), down(1.0), down(-1.0)], 1.0),
+    ("bayes just above last edges", [up(4.0), up(2.0), up(0.0)], 1.0),
+    ("bayes just below first edges", [down(-4.0), down(-2.0), down(-4.0)], 1.0),
+    ("bayes every logit outside", [10.0, 10.0, 10.0], 1.0),
+    ("bayes every logit outside", [-10.0, 5.0, 1e30], 0.7),
+    ("bayes every logit outside", [INF, -INF, INF], 1.0),
+    ("bayes every logit outside", [-INF, INF, -INF], 0.3),
+    ("bayes every logit outside at objectness 0", [10.0, 10.0, 10.0], 0.0),
+    ("bayes one logit outside", [10.0, 0.5, -3.5], 1.0),
+    ("bayes one logit outside", [3.0, -1e30, -3.5], 1.0),
+    ("bayes infinity and inside", [INF, 0.5, -0.5], 1.0),
+    ("bayes infinity and inside", [-1.0, -INF, -0.5], 0.6),
+    ("bayes objectness 0", [3.0, 0.5, -3.5], 0.0),
+    ("bayes objectness between", [3.0, 0.5, -3.5], 0.37),
+    ("bayes objectness smallest subnormal", [3.0, 0.5, -3.5], 1e-45),
+    ("bayes NaN logit", [3.0, NAN, -3.5], 1.0),
+    ("bayes NaN logit and outside", [10.0, 10.0, NAN], 1.0),
+    ("bayes objectness above 1", [3.0, 0.5, -3.5], 1.5),
+]
+
 
 def fmt(v):
     """A float as text that parses back to the same value (f32 inputs stay exact)."""
@@ -309,15 +483,19 @@ def fmt(v):
 
 
 def golden_rows(name, t, cases):
+    """One CSV row per case: inputs, ML, MAP and Bayes scores (the Bayes columns empty
+    for a table without that head), or the error."""
+    k = len(cases[0][1])
     rows = []
     for case, x, os_ in cases:
         x = [float(np.float32(v)) for v in x]
         os_ = float(np.float32(os_))
         try:
             scores = list(ml(t, x, os_)) + list(map_(t, x, os_))
+            scores += list(bayes(t, x, os_)) if t["bayes"] is not None else [None] * k
             err = ""
         except InferenceError as e:
-            scores, err = [None] * (2 * len(x)), str(e)
+            scores, err = [None] * (3 * k), str(e)
         rows.append([name, case, fmt(os_)] + [fmt(v) for v in x]
                     + ["" if s is None else fmt(s) for s in scores] + [err])
     return rows
@@ -325,11 +503,13 @@ def golden_rows(name, t, cases):
 
 def write_csv(path, k, rows, regenerate):
     head = ["table", "case", "objectness"] + ["x%d" % i for i in range(k)] \
-        + ["ml%d" % i for i in range(k)] + ["map%d" % i for i in range(k)] + ["error"]
+        + ["ml%d" % i for i in range(k)] + ["map%d" % i for i in range(k)] \
+        + ["bayes%d" % i for i in range(k)] + ["error"]
     with open(path, "w") as fh:
-        fh.write("# Expected ML and MAP scores (float64) from tools/mlmap_ref.py, numpy %s.\n"
-                 % np.__version__)
+        fh.write("# Expected ML, MAP and Bayes scores (float64) from tools/mlmap_ref.py, "
+                 "numpy %s.\n" % np.__version__)
         fh.write("# Regenerate: %s\n" % regenerate)
+        fh.write("# bayes*: empty for a table without a Bayes head.\n")
         fh.write("# error: empty, nan_logit:<first NaN class> or objectness.\n")
         fh.write(",".join(head) + "\n")
         for r in rows:
@@ -362,33 +542,66 @@ def default_cases(t, n, seed):
     return cases
 
 
+def bayes_cases(t, n, seed):
+    """n random logit vectors aimed at every region of the Bayes head's axes."""
+    rng = np.random.default_rng(seed)
+    b = t["bayes"]
+    cases = []
+    for _ in range(n):
+        x = []
+        for lo, hi in b["ranges"]:
+            kind = rng.integers(0, 10)
+            span = hi - lo
+            if kind < 5:  # inside or near the axis
+                v = rng.uniform(lo - 0.05 * span, hi + 0.05 * span)
+            elif kind < 8:  # exactly on an edge (float32, as the format defines it)
+                v = float(edges_f32(lo, hi, b["bins"])[rng.integers(0, b["bins"] + 1)])
+            else:  # far outside or infinite
+                v = [INF, -INF, hi + 5 * span, lo - 5 * span][rng.integers(0, 4)]
+            x.append(v)
+        r = rng.uniform()
+        os_ = 1.0 if r < 0.3 else (0.0 if r < 0.35 else rng.uniform())
+        cases.append(("random bayes", x, os_))
+    return cases
+
+
 def goldens(outdir):
     import os
     os.makedirs(outdir, exist_ok=True)
     regen = "python3 tools/mlmap_ref.py goldens tests/golden/layer"
     small = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, edge_mode=0, upper_tail=0)
     clamp = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, edge_mode=0, upper_tail=1)
-    for fname, data in (("small.mlmap", small), ("small_clamp.mlmap", clamp)):
-        with open(os.path.join(outdir, fname), "wb") as fh:
+    with_bg = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES)
+    no_bg = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES_NOBG)
+    files = (("small", small), ("small_clamp", clamp), ("small_bayes", with_bg),
+             ("small_bayes_nobg", no_bg))
+    rows = []
+    for name, data in files:
+        with open(os.path.join(outdir, name + ".mlmap"), "wb") as fh:
             fh.write(data)
-    rows = golden_rows("small", decode(small), SMALL_CASES) \
-        + golden_rows("small_clamp", decode(clamp), SMALL_CASES)
+        t = decode(data)
+        assert encode(t["classes"], t["lambda_ml"], t["lambda_map"], t["edge_mode"],
+                      t["upper_tail"], t["bayes"]) == data
+        cases = SMALL_CASES + (BAYES_CASES if t["bayes"] is not None else [])
+        rows += golden_rows(name, t, cases)
     write_csv(os.path.join(outdir, "small.csv"), 3, rows, regen)
     here = os.path.dirname(os.path.abspath(__file__))
     with open(os.path.join(here, "..", "tables", "default.mlmap"), "rb") as fh:
         t = decode(fh.read())
-    rows = golden_rows("default", t, default_cases(t, 300, seed=2))
+    cases = default_cases(t, 300, seed=2) + bayes_cases(t, 200, seed=3)
+    rows = golden_rows("default", t, cases)
     write_csv(os.path.join(outdir, "default.csv"), t["k"], rows, regen)
     print("numpy %s: wrote %s" % (np.__version__, outdir))
 
 
 def main():
-    if len(sys.argv) == 4 and sys.argv[1] == "fit":
-        classes, lml, lmap = fit(sys.argv[2])
-        with open(sys.argv[3], "wb") as fh:
-            fh.write(encode(classes, lml, lmap))
-    elif len(sys.argv) == 3 and sys.argv[1] == "goldens":
-        goldens(sys.argv[2])
+    args = sys.argv[1:]
+    if len(args) in (3, 4) and args[0] == "fit" and args[1:-2] in ([], ["--no-bayes"]):
+        classes, lml, lmap, head = fit(args[-2], bayes=len(args) == 3)
+        with open(args[-1], "wb") as fh:
+            fh.write(encode(classes, lml, lmap, bayes=head))
+    elif len(args) == 2 and args[0] == "goldens":
+        goldens(args[1])
     else:
         print(__doc__)
         sys.exit(2)

@@ -68,7 +68,8 @@ pub enum TableError {
         /// Class index.
         class: u16,
     },
-    /// A smoothing lambda is not in `(0, MAX_LAMBDA]`.
+    /// A smoothing lambda is not in `(0, MAX_LAMBDA]` (`(0, MAX_LAMBDA_BAYES]` for the
+    /// Bayes head).
     Lambda {
         /// Head of the lambda.
         head: Head,
@@ -119,7 +120,10 @@ impl fmt::Display for TableError {
             Self::Lambda { head } => write!(
                 f,
                 "{head} lambda is not in (0, {}]",
-                crate::MAX_LAMBDA
+                match head {
+                    Head::Bayes => crate::MAX_LAMBDA_BAYES,
+                    Head::Ml | Head::Map => crate::MAX_LAMBDA,
+                }
             ),
             Self::Name { class } => write!(
                 f,

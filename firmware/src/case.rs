@@ -24,6 +24,9 @@ pub struct Case<const K: usize> {
     pub ml: Expect<K>,
     /// The MAP head's answer.
     pub map: Expect<K>,
+    /// The Bayes head's answer (`uniform` is never set: outside every axis the answer is
+    /// `OS * pi[c]`, checked within the tolerance like any other).
+    pub bayes: Expect<K>,
 }
 
 /// An input the layer must reject.
@@ -34,6 +37,6 @@ pub struct ErrorCase<const K: usize> {
     pub logits: [f32; K],
     /// Objectness.
     pub objectness: f32,
-    /// The error both heads must return.
+    /// The error every head must return.
     pub error: InferError,
 }

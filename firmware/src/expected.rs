@@ -10,9 +10,9 @@ pub const K: usize = 3;
 /// The classes, in order: "car", "cyclist", "pedestrian".
 pub const CLASS_NAMES: [&str; K] = ["car", "cyclist", "pedestrian"];
 /// CRC-32 of the table the values were computed from (its last four bytes).
-pub const TABLE_CRC: u32 = 0x7c991078;
+pub const TABLE_CRC: u32 = 0x9756a697;
 
-/// Valid detections and their float64 ML and MAP scores.
+/// Valid detections and their float64 ML, MAP and Bayes scores.
 pub static CASES: &[Case<K>] = &[
     Case {
         label: "inside ML bin 0 of every class",
@@ -25,6 +25,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.3336447477149684, 0.33317764812839257, 0.333177604156639],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.14101317897726148, 0.012859485009458632, 0.01318385774679128],
             uniform: false,
             argmax: Some(0),
         },
@@ -43,6 +48,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.2887471581300527, 0.01823334633559146, 0.013491916303440198],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "inside ML bin 21 of every class",
@@ -55,6 +65,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.26413407440277487, 0.3204168876030338, 0.4154490379941914],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.2939420563712921, 0.16745261287464122, 0.3050544026369568],
             uniform: false,
             argmax: Some(2),
         },
@@ -73,6 +88,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.12380532534259137, 0.01364540107126625, 0.015399095425845442],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "on inner ML edge 7 of every class",
@@ -85,6 +105,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.8851610688016616, 0.00798462052720306, 0.006854286829277404],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.7906696850446393, 1.7322363641790336e-05, 3.491664453774115e-05],
             uniform: false,
             argmax: Some(0),
         },
@@ -103,6 +128,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        bayes: Expect {
+            scores: [0.2645478437260382, 0.1507073475947957, 0.27454895510019744],
+            uniform: false,
+            argmax: Some(2),
+        },
     },
     Case {
         label: "on inner MAP edge 1 of every class",
@@ -115,6 +145,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.26914524578459625, 0.26542729260049075, 0.26542747353584195],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.1998002122174363, 0.0007516557464325429, 0.0029502729274403275],
             uniform: false,
             argmax: Some(0),
         },
@@ -133,6 +168,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.48848484209174065, 0.0006378972298290424, 0.0005072364021690859],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "on the first ML edge of every class",
@@ -145,6 +185,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.3334840645441536, 0.3332579772074441, 0.3332579582484023],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.14101317897726148, 0.012859485009458632, 0.01318385774679128],
             uniform: false,
             argmax: Some(0),
         },
@@ -163,6 +208,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        bayes: Expect {
+            scores: [0.2939420563712921, 0.16745261287464122, 0.3050544026369568],
+            uniform: false,
+            argmax: Some(2),
+        },
     },
     Case {
         label: "on the closed last MAP edge of every class",
@@ -175,6 +225,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.21371143968796866, 0.24197369763160426, 0.29431486268042706],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.2204565422784691, 0.12558945965598092, 0.22879080197771762],
             uniform: false,
             argmax: Some(2),
         },
@@ -193,6 +248,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: None,
         },
+        bayes: Expect {
+            scores: [0.9024117618999465, 0.00323534708476825, 0.004580923309840837],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "class 0 one ulp below its first ML edge",
@@ -208,6 +268,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: None,
         },
+        bayes: Expect {
+            scores: [0.15269829951292604, 0.004751919773835583, 0.006684894885177962],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "only class 0 in support, at its mean",
@@ -220,6 +285,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.5979664194432056, 0.0010168021993261665, 0.0010168021993261665],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.5655291848502995, 0.0002966212132498345, 0.0005642560609362839],
             uniform: false,
             argmax: Some(0),
         },
@@ -238,6 +308,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.476517687999569, 0.0035401571540012704, 0.00020644391560894777],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "class 1 one ulp below its first ML edge",
@@ -250,6 +325,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.4695598290870662, 0.2651451911697069, 0.26529497974322686],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.5678539459878702, 0.0005372473209509332, 0.0001368731946608705],
             uniform: false,
             argmax: Some(0),
         },
@@ -268,6 +348,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(1),
         },
+        bayes: Expect {
+            scores: [0.010593986410893, 0.3253177435189333, 0.17389843009478967],
+            uniform: false,
+            argmax: Some(1),
+        },
     },
     Case {
         label: "class 2 one ulp above its last ML edge",
@@ -280,6 +365,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.4695394075542417, 0.26532693265264995, 0.26513365979310843],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.45486323142638957, 0.00021566595229361785, 0.0038933941155603257],
             uniform: false,
             argmax: Some(0),
         },
@@ -298,6 +388,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.6613078633501734, 0.00017305521176072484, 0.0003878987953446466],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "only class 2 in support, at its mean",
@@ -310,6 +405,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.0012740288597111404, 0.0012740288597111404, 0.5974519661224356],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.006570559098505536, 0.038077328659915054, 0.4705631270932521],
             uniform: false,
             argmax: Some(2),
         },
@@ -328,6 +428,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: true,
             argmax: None,
         },
+        bayes: Expect {
+            scores: [0.3905649933487171, 0.05837999900579447, 0.1110549981087449],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "far below every support",
@@ -342,6 +447,11 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.23333332935969034, 0.23333332935969034, 0.23333332935969034],
             uniform: true,
             argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.3905649933487171, 0.05837999900579447, 0.1110549981087449],
+            uniform: false,
+            argmax: Some(0),
         },
     },
     Case {
@@ -358,6 +468,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: true,
             argmax: None,
         },
+        bayes: Expect {
+            scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "+inf everywhere",
@@ -372,6 +487,11 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
             uniform: true,
             argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
+            uniform: false,
+            argmax: Some(0),
         },
     },
     Case {
@@ -388,6 +508,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: true,
             argmax: None,
         },
+        bayes: Expect {
+            scores: [0.2789749999999996, 0.04169999999999996, 0.0793250000000002],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "largest finite values",
@@ -402,6 +527,11 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
             uniform: true,
             argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
+            uniform: false,
+            argmax: Some(0),
         },
     },
     Case {
@@ -418,6 +548,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(1),
         },
+        bayes: Expect {
+            scores: [0.828893716742028, 0.00568200670646271, 0.007705444996899509],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "-inf in the last class, others inside",
@@ -433,6 +568,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.6418173994249811, 0.00015096807795356623, 0.0015413331044763707],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "objectness 0.0",
@@ -444,6 +584,11 @@ pub static CASES: &[Case<K>] = &[
             argmax: None,
         },
         map: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: false,
+            argmax: None,
+        },
+        bayes: Expect {
             scores: [0.0, 0.0, 0.0],
             uniform: false,
             argmax: None,
@@ -463,6 +608,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.014184756891516598, 0.05925705048535051, 0.20578102951778857],
+            uniform: false,
+            argmax: Some(2),
+        },
     },
     Case {
         label: "objectness 0.37",
@@ -478,6 +628,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.005248360117499333, 0.021925108962139325, 0.07613898190282219],
+            uniform: false,
+            argmax: Some(2),
+        },
     },
     Case {
         label: "objectness 1e-06",
@@ -490,6 +645,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [3.840840398195172e-07, 3.0964228172238546e-07, 3.0627367593334e-07],
+            uniform: false,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [1.418475685570353e-08, 5.925705033574084e-08, 2.057810289982414e-07],
             uniform: false,
             argmax: None,
         },
@@ -508,6 +668,211 @@ pub static CASES: &[Case<K>] = &[
             uniform: true,
             argmax: None,
         },
+        bayes: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: false,
+            argmax: None,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 0 of every logit",
+        logits: [-8.327607, -8.127759, -7.9023666],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.4787230454602543, 0.04375341886718573, 0.13313755724337298],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "inside Bayes bin 11 of every logit",
+        logits: [0.7384424, -0.43345928, -0.37101603],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.19118593210377202, 0.5348575321602917, 0.2739565357359362],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.05298798989146323, 0.8274062575081028, 0.11960575260043389],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.008028997919529485, 0.002445387255971787, 0.002008693827190511],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "inside Bayes bin 21 of every logit",
+        logits: [8.980307, 6.5613585, 6.4756656],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.27955380975351096, 0.3350396747331655, 0.38540651551332356],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.26148506105292973, 0.3198308000859178, 0.41868413886115247],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.2939420563712921, 0.16745261287464122, 0.3050544026369568],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "on inner Bayes edge 1 of every logit",
+        logits: [-7.915514, -7.778018, -7.5600324],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.29999999205271405, 0.29999999205271405, 0.29999999205271405],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.29999999205271405, 0.29999999205271405, 0.29999999205271405],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.4862266738516696, 0.11030988538857829, 0.07869840193580636],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "on inner Bayes edge 7 of every logit",
+        logits: [-2.970396, -3.5811276, -3.452023],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.1383846353538197, 0.4249889590238476, 0.33662638178047477],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.29182814832487053, 0.3120633792833114, 0.2961084485499602],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.042799766717562235, 0.05886572286672199, 0.07964568808091091],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "on the first Bayes edge of every logit",
+        logits: [-8.7397, -8.4775, -8.2447],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.4787230454602543, 0.04375341886718573, 0.13313755724337298],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "on the closed last Bayes edge of every logit",
+        logits: [9.3924, 6.9111, 6.818],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.22364305113534988, 0.26803174378051653, 0.30832521700506255],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.22795887239735177, 0.25810528131977956, 0.31393585820379766],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.23515364860109605, 0.13396209229590367, 0.2440435257460973],
+            uniform: false,
+            argmax: Some(2),
+        },
+    },
+    Case {
+        label: "one ulp outside every Bayes axis",
+        logits: [-8.739701, 6.9111004, -8.244701],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "one ulp outside every Bayes axis, objectness 0.25",
+        logits: [9.392401, 6.9111004, 6.8180003],
+        objectness: 0.25,
+        ml: Expect {
+            scores: [0.08333333333333333, 0.08333333333333333, 0.08333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.08333333333333333, 0.08333333333333333, 0.08333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.1394874999999998, 0.02084999999999998, 0.0396625000000001],
+            uniform: false,
+            argmax: Some(0),
+        },
+    },
+    Case {
+        label: "logit 0 below its Bayes axis, others inside",
+        logits: [-8.739701, -0.43345928, -0.37101603],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.1771765719881904, 0.544121727821545, 0.2787017001902646],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.05135884923629773, 0.8288296409056273, 0.11981150985807489],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.18180826112006226, 0.06766075214565707, 0.05380176442467864],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "test.csv id 25001 (background)",
@@ -520,6 +885,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.5840353630174463, 0.012783673229358642, 0.012280947922201448],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.49392940948211866, 5.218358035702415e-05, 4.024168632820896e-05],
             uniform: false,
             argmax: Some(0),
         },
@@ -538,6 +908,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        bayes: Expect {
+            scores: [0.00025984022606290885, 0.0015282907723322304, 0.6370638759354834],
+            uniform: false,
+            argmax: Some(2),
+        },
     },
     Case {
         label: "test.csv id 25003 (cyclist)",
@@ -553,6 +928,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        bayes: Expect {
+            scores: [4.303319133433639e-06, 0.6750538474064436, 0.26738343972486717],
+            uniform: false,
+            argmax: Some(1),
+        },
     },
     Case {
         label: "test.csv id 25004 (cyclist)",
@@ -565,6 +945,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.0017568890350236836, 0.8142749540816631, 0.001768142292096222],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.00032021718728819523, 0.7409789910885818, 0.02205894191531674],
             uniform: false,
             argmax: Some(1),
         },
@@ -583,6 +968,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.5130814078461192, 0.00015237643217666446, 0.00014798590938541918],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "test.csv id 25006 (car)",
@@ -595,6 +985,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.436179450584012, 0.2892806530700389, 0.21293986687741276],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.4043306219973389, 0.00020531735791440991, 0.00011515105848113573],
             uniform: false,
             argmax: Some(0),
         },
@@ -613,6 +1008,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.30387750533328595, 3.905960129149266e-06, 6.0676467924322245e-06],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "test.csv id 25008 (pedestrian)",
@@ -625,6 +1025,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.002811018685181924, 0.002900537693041106, 0.8805884709922299],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.00011831176191749637, 0.0034503574292867787, 0.8256756420374969],
             uniform: false,
             argmax: Some(2),
         },
@@ -643,6 +1048,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.6292897576405663, 2.243536949810182e-05, 1.9710167369705066e-05],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "test.csv id 25010 (car)",
@@ -655,6 +1065,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.7706876905326756, 0.0020034776150249156, 0.0014088374789779628],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.737323467146942, 1.0632209300664856e-05, 2.1431317369793472e-05],
             uniform: false,
             argmax: Some(0),
         },
@@ -673,6 +1088,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.8811642364151898, 1.7771709668179785e-05, 2.5538705637686715e-05],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "test.csv id 25012 (car)",
@@ -685,6 +1105,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.8537307385654677, 0.013089089837196335, 0.009380191910598926],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.86226933029453, 4.2442519378457036e-05, 6.448112175073197e-05],
             uniform: false,
             argmax: Some(0),
         },
@@ -703,6 +1128,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.7104470339022856, 1.708877831472399e-05, 2.3174319949067618e-05],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "test.csv id 25014 (pedestrian)",
@@ -715,6 +1145,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.0017378042289123115, 0.0017378066994553903, 0.8142244174911268],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.00015287412440586538, 0.013572953862778297, 0.7586220836080071],
             uniform: false,
             argmax: Some(2),
         },
@@ -733,6 +1168,11 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        bayes: Expect {
+            scores: [0.9119053402563204, 1.5018051645913841e-05, 1.688439368979084e-05],
+            uniform: false,
+            argmax: Some(0),
+        },
     },
     Case {
         label: "test.csv id 25016 (car)",
@@ -745,6 +1185,11 @@ pub static CASES: &[Case<K>] = &[
         },
         map: Expect {
             scores: [0.8927453272762887, 0.001693236273369628, 0.0016614210961849374],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.8854658852591796, 1.692148614315698e-05, 2.08723198862832e-05],
             uniform: false,
             argmax: Some(0),
         },

@@ -36,29 +36,46 @@ fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
     unsafe { mlmap_panic_path_reachable() }
 }
 
-/// `true` when the scores are finite, in `[0, os]` and sum to `os`.
-fn sane<const K: usize>(s: &Scores<K>, os: f32) -> bool {
+/// The sum of the scores, or NaN when one is not finite and in `[0, os]`.
+fn checked_sum<const K: usize>(s: &Scores<K>, os: f32) -> f32 {
     let mut sum = 0.0f32;
     for &v in s.as_array() {
         if !(v >= 0.0 && v <= os) {
-            return false;
+            return f32::NAN;
         }
         sum += v;
     }
-    (sum - os).abs() <= 1e-5
+    sum
 }
 
-/// Scores one detection with every head of `table` and checks the results.
+/// `true` when the scores are finite, in `[0, os]` and sum to `os`.
+fn sane<const K: usize>(s: &Scores<K>, os: f32) -> bool {
+    (checked_sum(s, os) - os).abs() <= 1e-5
+}
+
+/// `true` when the scores are finite, in `[0, os]` and sum to at most `os` (the Bayes
+/// head of a table with a background category keeps the background's share out).
+fn sane_at_most<const K: usize>(s: &Scores<K>, os: f32) -> bool {
+    checked_sum(s, os) <= os + 1e-5
+}
+
+/// Scores one detection with every head of `table` (ML, MAP, Bayes) and checks the
+/// results.
 fn score(table: &EmbeddedTable, logits: &[f32; 3], os: f32) -> Result<u32, InferError> {
     let mut failed = 0;
     let ml = table.ml(logits, os)?;
     let map = table.map(logits, os)?;
+    let bayes = table.bayes(logits, os)?;
     failed += u32::from(!sane(&ml, os)) + u32::from(!sane(&map, os));
+    failed += u32::from(!sane_at_most(&bayes, os));
     failed += u32::from(ml.argmax() >= 3) + u32::from(table.class_name(map.argmax()).is_none());
+    failed += u32::from(table.class_name(bayes.argmax()).is_none());
     #[cfg(feature = "micromath")]
     {
         let fast = table.map_with::<mlmap::FastMath>(logits, os)?;
         failed += u32::from(!sane(&fast, os));
+        let fast = table.bayes_with::<mlmap::FastMath>(logits, os)?;
+        failed += u32::from(!sane_at_most(&fast, os));
     }
     Ok(failed)
 }
@@ -110,7 +127,9 @@ fn run() -> u32 {
     // Invalid inputs are errors, not panics.
     let nan = black_box([f32::NAN, 0.0, 0.0]);
     failed += u32::from(decoded.ml(&nan, 1.0).is_ok() || decoded.map(&nan, 1.0).is_ok());
+    failed += u32::from(decoded.bayes(&nan, 1.0).is_ok());
     failed += u32::from(decoded.ml(&[0.0; 3], black_box(1.5)).is_ok());
+    failed += u32::from(embedded.bayes(&[0.0; 3], black_box(1.5)).is_ok());
 
     // Batches into caller-provided buffers.
     let logits: [[f32; 3]; 4] = black_box(inputs.map(|(l, _)| l));
@@ -118,6 +137,7 @@ fn run() -> u32 {
     let mut out = [[0.0f32; 3]; 4];
     failed += u32::from(decoded.ml_batch(&logits, Some(&os), &mut out).is_err());
     failed += u32::from(embedded.map_batch(&logits, None, &mut out).is_err());
+    failed += u32::from(decoded.bayes_batch(&logits, Some(&os), &mut out).is_err());
     #[cfg(feature = "micromath")]
     {
         failed += u32::from(

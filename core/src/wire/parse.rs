@@ -264,4 +264,3 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for ClassSeed<'_, S> {
 fn store(slot: &mut f32, v: f32) {
     *slot = v;
 }
-
