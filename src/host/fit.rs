@@ -50,18 +50,19 @@
 
 mod bayes;
 mod binpicker;
+mod error;
 mod stats;
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use crate::host::dataset::{DataError, DataSource, Label, Row};
+use crate::host::dataset::{DataSource, Label, Row};
 use crate::host::DynTable;
-use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA, VARIANCE_FLOOR};
+use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
 
 pub use bayes::{BayesCounts, BayesMoments, BayesParams};
+pub use error::{warnings, FitError, FitWarning};
 pub use stats::{ClassHistogram, ClassMoments};
 
 use stats::BinCounter;
@@ -161,140 +162,6 @@ impl FitParams {
             lambda_map: self.lambda_map,
             edge_mode: self.edges,
             upper_tail: self.upper_tail,
-        }
-    }
-}
-
-/// Why a table could not be fitted.
-#[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
-pub enum FitError {
-    /// The training data could not be read.
-    Data(DataError),
-    /// A hyper-parameter is out of range.
-    Param {
-        /// Parameter name (as in [`FitParams`]).
-        name: &'static str,
-        /// The value given.
-        value: String,
-        /// The accepted range.
-        expected: &'static str,
-    },
-    /// The training data has no labels.
-    NoLabels {
-        /// The training input.
-        path: PathBuf,
-    },
-    /// Some classes have no training rows.
-    EmptyClasses {
-        /// The training input.
-        path: PathBuf,
-        /// The classes without rows.
-        classes: Vec<String>,
-    },
-    /// A class's histogram range cannot be split into the requested bins with distinct
-    /// `f32` edges (the values span too little for their magnitude).
-    Edges {
-        /// The class.
-        class: String,
-        /// Requested bins.
-        bins: usize,
-        /// First edge.
-        lo: f32,
-        /// Last edge.
-        hi: f32,
-    },
-    /// A class's logits, or their variance, do not fit in `f32`.
-    OutOfF32 {
-        /// The class.
-        class: String,
-    },
-    /// The input changed between the two passes of [`fit`].
-    Changed {
-        /// The training input.
-        path: PathBuf,
-    },
-    /// The fitted statistics break a table invariant.
-    Table(TableError),
-}
-
-impl FitError {
-    /// `true` when the input or the parameters are at fault (exit code 2), `false` for
-    /// an I/O or internal failure (exit code 1).
-    pub fn is_bad_input(&self) -> bool {
-        match self {
-            Self::Data(e) => e.is_bad_input(),
-            Self::Changed { .. } | Self::Table(_) => false,
-            Self::Param { .. }
-            | Self::NoLabels { .. }
-            | Self::EmptyClasses { .. }
-            | Self::Edges { .. }
-            | Self::OutOfF32 { .. } => true,
-        }
-    }
-}
-
-impl From<DataError> for FitError {
-    fn from(e: DataError) -> Self {
-        Self::Data(e)
-    }
-}
-
-impl fmt::Display for FitError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Data(e) => write!(f, "{e}"),
-            Self::Param {
-                name,
-                value,
-                expected,
-            } => write!(f, "{name} = {value} is out of range: expected {expected}"),
-            Self::NoLabels { path } => write!(
-                f,
-                "{}: the data has no labels (a `label` column or labels.npy); \
-                 fitting needs labelled rows",
-                path.display()
-            ),
-            Self::EmptyClasses { path, classes } => {
-                write!(f, "{}: ", path.display())?;
-                let quoted: Vec<String> = classes.iter().map(|c| std::format!("{c:?}")).collect();
-                match quoted.as_slice() {
-                    [one] => write!(f, "class {one} has no training rows")?,
-                    many => write!(f, "classes {} have no training rows", many.join(", "))?,
-                }
-                f.write_str(" (rows labelled with the class); every class needs at least one")
-            }
-            Self::Edges {
-                class,
-                bins,
-                lo,
-                hi,
-            } => write!(
-                f,
-                "class {class:?}: the range [{lo}, {hi}] cannot be split into {bins} bins \
-                 with distinct f32 edges; use fewer bins"
-            ),
-            Self::OutOfF32 { class } => write!(
-                f,
-                "class {class:?}: the training logits or their variance exceed the f32 \
-                 range of a table"
-            ),
-            Self::Changed { path } => write!(
-                f,
-                "{}: the input changed while it was being read",
-                path.display()
-            ),
-            Self::Table(e) => write!(f, "the fitted table is invalid: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for FitError {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        match self {
-            Self::Data(e) => Some(e),
-            Self::Table(e) => Some(e),
-            _ => None,
         }
     }
 }
@@ -512,58 +379,6 @@ pub fn build_table(
         });
     }
     DynTable::new(settings, specs).map_err(FitError::Table)
-}
-
-/// Something legal but suspicious about a fitted table, worth telling the user.
-#[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
-pub enum FitWarning {
-    /// The class has one training row, or all its rows have the same logit: its sample
-    /// variance is 0 and the prior's variance is the floor.
-    DegeneratePrior {
-        /// The class.
-        class: String,
-        /// Its training rows.
-        rows: u64,
-        /// The prior's mean (the class's one training value).
-        mean: f32,
-    },
-}
-
-impl fmt::Display for FitWarning {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::DegeneratePrior { class, rows, mean } => {
-                let why = if *rows == 1 {
-                    "has a single training row".to_string()
-                } else {
-                    std::format!("has {rows} training rows with the same logit")
-                };
-                write!(
-                    f,
-                    "class {class:?} {why}: its sample variance is 0, floored to {VARIANCE_FLOOR:e}, \
-                     so its MAP prior is a spike at {mean}: MAP gives the class evidence only for \
-                     logits within about 1e-5 of that value, and lambda alone elsewhere; \
-                     collect more rows for it, or rely on the ML or Bayes head"
-                )
-            }
-        }
-    }
-}
-
-/// The warnings of a fitted table (see [`FitWarning`]).
-pub fn warnings(table: &DynTable) -> Vec<FitWarning> {
-    table
-        .class_names()
-        .zip(table.rows())
-        .zip(table.priors())
-        .filter(|(_, p)| f64::from(p.variance()) <= VARIANCE_FLOOR)
-        .map(|((name, &rows), p)| FitWarning::DegeneratePrior {
-            class: name.to_string(),
-            rows,
-            mean: p.mean(),
-        })
-        .collect()
 }
 
 /// The training values of every class, held in memory, for fitting many tables from
