@@ -18,7 +18,7 @@ pub enum FitError {
     Data(DataError),
     /// A hyper-parameter is out of range.
     Param {
-        /// Parameter name (as in [`FitParams`]).
+        /// Parameter name (as in [`FitParams`](super::FitParams)).
         name: &'static str,
         /// The value given.
         value: String,
@@ -54,7 +54,7 @@ pub enum FitError {
         /// The class.
         class: String,
     },
-    /// The input changed between the two passes of [`fit`].
+    /// The input changed between the two passes of [`fit`](super::fit()).
     Changed {
         /// The training input.
         path: PathBuf,
