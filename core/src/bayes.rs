@@ -136,15 +136,17 @@ impl<'a> BayesView<'a> {
         if logits.len() != k || out.len() != k || scratch.len() != self.categories() {
             return Err(InferError::Length);
         }
+        // `max(1)`: a validated head has `k, b >= 1`; it lets the compiler see that the
+        // chunk sizes are never 0 (no panic path), whatever the storage.
         let mut max = f32::NEG_INFINITY;
         for ((l, &prior), cat_terms) in scratch
             .iter_mut()
             .zip(self.log_prior)
-            .zip(self.terms.chunks_exact(k * b))
+            .zip(self.terms.chunks_exact(k.saturating_mul(b).max(1)))
         {
             let mut sum = prior;
             for ((axis, &x), logit_terms) in
-                self.axes.iter().zip(logits).zip(cat_terms.chunks_exact(b))
+                self.axes.iter().zip(logits).zip(cat_terms.chunks_exact(b.max(1)))
             {
                 sum += match axis.bin(x) {
                     Some(bin) => logit_terms.get(bin).copied().unwrap_or(self.log_lambda),
