@@ -145,8 +145,11 @@ impl<'a> BayesView<'a> {
             .zip(self.terms.chunks_exact(k.saturating_mul(b).max(1)))
         {
             let mut sum = prior;
-            for ((axis, &x), logit_terms) in
-                self.axes.iter().zip(logits).zip(cat_terms.chunks_exact(b.max(1)))
+            for ((axis, &x), logit_terms) in self
+                .axes
+                .iter()
+                .zip(logits)
+                .zip(cat_terms.chunks_exact(b.max(1)))
             {
                 sum += match axis.bin(x) {
                     Some(bin) => logit_terms.get(bin).copied().unwrap_or(self.log_lambda),

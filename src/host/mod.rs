@@ -9,6 +9,7 @@ pub use mlmap_core::{BayesSpec, DynTable};
 
 pub mod baselines;
 pub mod dataset;
+pub mod export;
 pub mod fit;
 pub mod metrics;
 pub mod tune;
