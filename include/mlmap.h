@@ -105,7 +105,8 @@ enum mlmap_status_t
    */
   MLMAP_ERR_NO_TABLE = 4,
   /**
-   * The bytes overlap the table storage they are decoded into.
+   * An output overlaps the table storage (the bytes decoded into it, or the
+   * scores of a detection).
    */
   MLMAP_ERR_OVERLAP = 5,
   /**
@@ -380,11 +381,12 @@ mlmap_status_t mlmap_class_index(const mlmap_table_t *table,
  * @param n_logits Number of logits; must be K.
  * @param objectness The detection's objectness, in [0, 1] (1 if the detector has
  *   none).
- * @param[out] out Receives the K scores; may be `logits` itself.
+ * @param[out] out Receives the K scores; may be `logits` itself, must not overlap the
+ *   table.
  * @param out_len Number of floats at `out`, at least K.
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
  *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
- *   `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS`.
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS`.
  */
 mlmap_status_t mlmap_ml(const mlmap_table_t *table,
                         const float *logits,
@@ -447,7 +449,8 @@ mlmap_status_t mlmap_bayes(const mlmap_table_t *table,
  * @param rows Number of detections (0 is allowed).
  * @param n_logits Logits per row; must be K.
  * @param objectness `rows` floats, or NULL for an objectness of 1 everywhere.
- * @param[out] out Receives `rows * K` scores; may be `logits` itself.
+ * @param[out] out Receives `rows * K` scores; may be `logits` itself, must not
+ *   overlap the table.
  * @param out_len Number of floats at `out`, at least `rows * K`.
  * @param[out] done If not NULL, receives the number of rows written.
  * @return As `mlmap_ml`, and `MLMAP_ERR_TOO_LARGE`.

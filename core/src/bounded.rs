@@ -154,6 +154,8 @@ pub struct BoundedTable<
     bayes_bins: usize,
     /// Bayes categories in use; 0 without a Bayes head.
     bayes_categories: usize,
+    /// Log-terms in use: `bayes_categories * k * bayes_bins`.
+    bayes_terms_len: usize,
     bayes_axes: [Axis; K],
     /// The log-terms, category-major with the run-time shape: the first
     /// `categories * k * bins` floats of the flattened array are in use.
@@ -220,6 +222,7 @@ impl<
             settings: Settings::ZERO,
             bayes_bins: 0,
             bayes_categories: 0,
+            bayes_terms_len: 0,
             bayes_axes: [Axis::ZERO; K],
             bayes_terms: [[[0.0; B_BAYES]; K]; C],
             bayes_rows: [0; C],
@@ -272,6 +275,7 @@ impl<
         self.k = 0;
         self.bayes_bins = 0;
         self.bayes_categories = 0;
+        self.bayes_terms_len = 0;
     }
 
     /// Whether the table holds no table.
@@ -387,6 +391,7 @@ impl<
             return Err(TableError::ClassCount.into());
         }
         (self.k, self.bayes_bins, self.bayes_categories) = (k, bins_bayes, categories);
+        self.bayes_terms_len = terms;
         let view = self.view().ok_or(malformed)?;
         wire::check_canonical(bytes.len(), &view)
     }

@@ -15,7 +15,12 @@
 #![allow(clippy::missing_safety_doc)] // every entry point documents its contract in prose
 #![cfg_attr(
     not(test),
-    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::indexing_slicing)
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
 )]
 
 use core::ffi::c_char;
@@ -29,7 +34,7 @@ use mlmap::{
 mod limits {
     include!(concat!(env!("OUT_DIR"), "/limits.rs"));
 }
-use limits::{MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES, MAX_CLASSES};
+use limits::{FAST_CLASSES, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES, MAX_CLASSES};
 
 /// The table type behind the opaque `mlmap_table_t`.
 type Inner = BoundedTable<MAX_CLASSES, MAX_BINS, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES>;
@@ -55,7 +60,8 @@ const fn table_words(classes: usize, bins: usize, bins_bayes: usize) -> usize {
     (256 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes)).div_ceil(8)
 }
 
-const _: () = assert!(size_of::<Storage>() <= 8 * table_words(MAX_CLASSES, MAX_BINS, MAX_BINS_BAYES));
+const _: () =
+    assert!(size_of::<Storage>() <= 8 * table_words(MAX_CLASSES, MAX_BINS, MAX_BINS_BAYES));
 const _: () = assert!(align_of::<Storage>() <= MLMAP_TABLE_ALIGN);
 
 /// An all-zero table is a valid, empty table: const evaluation rejects this item if a
@@ -97,7 +103,8 @@ pub enum mlmap_status_t {
     MLMAP_ERR_STORAGE_TOO_SMALL = 3,
     /// The table storage holds no table: never decoded into, or the last decode failed.
     MLMAP_ERR_NO_TABLE = 4,
-    /// The bytes overlap the table storage they are decoded into.
+    /// An output overlaps the table storage (the bytes decoded into it, or the
+    /// scores of a detection).
     MLMAP_ERR_OVERLAP = 5,
     /// Decode: the input is shorter than the smallest table.
     MLMAP_ERR_TRUNCATED = 6,
@@ -499,7 +506,10 @@ unsafe fn class_name(
     let v = unsafe { view(table) }?;
     check_ptr(buf)?;
     let mut name = [0u8; MLMAP_NAME_MAX + 1];
-    let src = v.class_name(class_index).ok_or(MLMAP_ERR_CLASS_INDEX)?.as_bytes();
+    let src = v
+        .class_name(class_index)
+        .ok_or(MLMAP_ERR_CLASS_INDEX)?
+        .as_bytes();
     let n = src.len();
     if n >= buf_len {
         return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
@@ -564,8 +574,41 @@ enum HeadKind {
     Bayes,
 }
 
-/// Scores one detection whose logits are already copied into `x` (K entries) into
-/// `out` (K entries).
+/// Scores one detection with `K`, the table's class count, known at compile time: the
+/// layer's loops then have constant trip counts, as for the fixed-size Rust `Table`.
+#[inline(always)]
+fn score_k<const K: usize>(
+    v: &View<'_>,
+    head: HeadKind,
+    x: &[f32],
+    objectness: f32,
+    out: &mut [f32],
+) -> Result<(), InferError> {
+    let (Some(x), Some(out)) = (x.get(..K), out.get_mut(..K)) else {
+        return Err(InferError::Length);
+    };
+    let mut scratch = [0.0f32; K];
+    match head {
+        HeadKind::Ml => v.ml_into(x, objectness, out, &mut scratch),
+        HeadKind::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
+        HeadKind::Bayes => score_bayes(v, x, objectness, out),
+    }
+}
+
+/// The Bayes head, with its scratch of one float per category.
+#[inline(always)]
+fn score_bayes(
+    v: &View<'_>,
+    x: &[f32],
+    objectness: f32,
+    out: &mut [f32],
+) -> Result<(), InferError> {
+    let mut cats = [0.0f32; MAX_CATEGORIES];
+    let c = v.bayes().map_or(0, |b| b.categories());
+    v.bayes_into::<Libm>(x, objectness, out, cats.get_mut(..c).unwrap_or(&mut []))
+}
+
+/// Scores one detection: logits `x` (K entries) into `out` (K entries).
 #[inline(always)]
 fn score(
     v: &View<'_>,
@@ -574,20 +617,34 @@ fn score(
     objectness: f32,
     out: &mut [f32],
 ) -> Result<(), InferError> {
-    let mut scratch = [0.0f32; MAX_CATEGORIES + MAX_CLASSES];
-    match head {
-        HeadKind::Ml => v.ml_into(x, objectness, out, scratch.get_mut(..x.len()).unwrap_or(&mut [])),
-        HeadKind::Map => {
-            v.map_into::<Libm>(x, objectness, out, scratch.get_mut(..x.len()).unwrap_or(&mut []))
-        }
-        HeadKind::Bayes => {
-            let c = v.bayes().map_or(0, |b| b.categories());
-            v.bayes_into::<Libm>(x, objectness, out, scratch.get_mut(..c).unwrap_or(&mut []))
-        }
+    // The class counts of FAST_CLASSES (MLMAP_FAST_CLASSES) run specialised code.
+    macro_rules! dispatch {
+        ($($k:literal)*) => {
+            match x.len() {
+                $($k if FAST_CLASSES.contains(&$k) => score_k::<$k>(v, head, x, objectness, out),)*
+                _ => {
+                    let mut scratch = [0.0f32; MAX_CLASSES];
+                    let s = scratch.get_mut(..x.len()).unwrap_or(&mut []);
+                    match head {
+                        HeadKind::Ml => v.ml_into(x, objectness, out, s),
+                        HeadKind::Map => v.map_into::<Libm>(x, objectness, out, s),
+                        HeadKind::Bayes => score_bayes(v, x, objectness, out),
+                    }
+                }
+            }
+        };
     }
+    dispatch!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
-/// One detection through `head`: the checks and copies of the C API around [`score`].
+/// Whether the byte ranges `[a, a + a_len)` and `[b, b + b_len)` overlap.
+#[inline(always)]
+fn overlap(a: usize, a_len: usize, b: usize, b_len: usize) -> bool {
+    // `a` in `[b, b + b_len)` or `b` in `[a, a + a_len)`, without overflow.
+    a.wrapping_sub(b) < b_len || b.wrapping_sub(a) < a_len
+}
+
+/// One detection through `head`: the checks of the C API around [`score`].
 #[inline(always)]
 unsafe fn detection(
     head: HeadKind,
@@ -609,19 +666,36 @@ unsafe fn detection(
     if out_len < k {
         return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
     }
+    let bytes = k * size_of::<f32>();
+    if overlap(out as usize, bytes, table as usize, size_of::<Storage>()) {
+        return Err(MLMAP_ERR_OVERLAP);
+    }
+    if !overlap(out as usize, bytes, logits as usize, bytes) {
+        // SAFETY: `k` readable floats at `logits` and `k <= out_len` writable ones at
+        // `out` (the caller's promise), non-NULL and aligned (checked), disjoint from
+        // each other and from the table (checked).
+        let (x, o) = unsafe {
+            (
+                core::slice::from_raw_parts(logits, k),
+                core::slice::from_raw_parts_mut(out, k),
+            )
+        };
+        return Ok(score(&v, head, x, objectness, o)?);
+    }
+    // In place: the logits are copied first.
     let mut x = [0.0f32; MAX_CLASSES];
-    let mut s = [0.0f32; MAX_CLASSES];
-    let (x, s) = (
-        x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?,
-        s.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?,
-    );
-    // SAFETY: `k` readable floats at `logits` (the caller's promise), aligned and
-    // non-NULL (checked); `x` is a local array.
-    unsafe { ptr::copy_nonoverlapping(logits, x.as_mut_ptr(), k) };
-    score(&v, head, x, objectness, s)?;
-    // SAFETY: `k <= out_len` writable floats at `out`; `s` is a local array.
-    unsafe { ptr::copy_nonoverlapping(s.as_ptr(), out, k) };
-    Ok(())
+    let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
+    // SAFETY: as above; `x` is a local array, and `out` no longer overlaps an input.
+    unsafe {
+        ptr::copy_nonoverlapping(logits, x.as_mut_ptr(), k);
+        Ok(score(
+            &v,
+            head,
+            x,
+            objectness,
+            core::slice::from_raw_parts_mut(out, k),
+        )?)
+    }
 }
 
 /// Rows of a batch through `head`.
@@ -660,26 +734,44 @@ unsafe fn batch(
     if out_len < total {
         return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
     }
+    let bytes = total * size_of::<f32>();
+    if overlap(out as usize, bytes, table as usize, size_of::<Storage>()) {
+        return Err(MLMAP_ERR_OVERLAP);
+    }
+    let os_bytes = if objectness.is_null() {
+        0
+    } else {
+        rows * size_of::<f32>()
+    };
+    let in_place = overlap(out as usize, bytes, logits as usize, bytes)
+        || overlap(out as usize, bytes, objectness as usize, os_bytes);
     let mut x = [0.0f32; MAX_CLASSES];
-    let mut s = [0.0f32; MAX_CLASSES];
-    let (x, s) = (
-        x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?,
-        s.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?,
-    );
+    let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
     for r in 0..rows {
         let at = r * k;
         // SAFETY: row `r < rows` of `rows * k` readable floats at `logits`, and of as
-        // many writable ones at `out`; one readable float per row at `objectness`.
-        // Each row is copied in before it is written, so the buffers may overlap.
+        // many writable ones at `out`; one readable float per row at `objectness`; the
+        // output never overlaps the table (checked). When it overlaps an input, each
+        // row's inputs are copied before its output is written.
         unsafe {
-            ptr::copy(logits.add(at), x.as_mut_ptr(), k);
             let os = if objectness.is_null() {
                 1.0
             } else {
                 objectness.add(r).read()
             };
-            score(&v, head, x, os, s)?;
-            ptr::copy(s.as_ptr(), out.add(at), k);
+            let input: &[f32] = if in_place {
+                ptr::copy(logits.add(at), x.as_mut_ptr(), k);
+                x
+            } else {
+                core::slice::from_raw_parts(logits.add(at), k)
+            };
+            score(
+                &v,
+                head,
+                input,
+                os,
+                core::slice::from_raw_parts_mut(out.add(at), k),
+            )?;
             if !done.is_null() {
                 done.write(r + 1);
             }
@@ -698,11 +790,12 @@ unsafe fn batch(
 /// @param n_logits Number of logits; must be K.
 /// @param objectness The detection's objectness, in [0, 1] (1 if the detector has
 ///   none).
-/// @param[out] out Receives the K scores; may be `logits` itself.
+/// @param[out] out Receives the K scores; may be `logits` itself, must not overlap the
+///   table.
 /// @param out_len Number of floats at `out`, at least K.
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
 ///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
-///   `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS`.
+///   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS`.
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_ml(
     table: *const mlmap_table_t,
@@ -807,7 +900,8 @@ pub unsafe extern "C" fn mlmap_bayes(
 /// @param rows Number of detections (0 is allowed).
 /// @param n_logits Logits per row; must be K.
 /// @param objectness `rows` floats, or NULL for an objectness of 1 everywhere.
-/// @param[out] out Receives `rows * K` scores; may be `logits` itself.
+/// @param[out] out Receives `rows * K` scores; may be `logits` itself, must not
+///   overlap the table.
 /// @param out_len Number of floats at `out`, at least `rows * K`.
 /// @param[out] done If not NULL, receives the number of rows written.
 /// @return As `mlmap_ml`, and `MLMAP_ERR_TOO_LARGE`.
@@ -981,7 +1075,7 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         2 => c"a pointer is not aligned for its type",
         3 => c"the table storage is smaller than the library needs (MLMAP_MAX_* differ from the library's build)",
         4 => c"the table storage holds no decoded table",
-        5 => c"the table bytes overlap the table storage",
+        5 => c"an output or the table bytes overlap the table storage",
         6 => c"input is too short to be an mlmap table",
         7 => c"input does not start with the mlmap magic MLMP",
         8 => c"table checksum does not match its contents",

@@ -379,6 +379,12 @@ static void test_head_arguments(const mlmap_table_t *t, one_fn one, batch_fn bat
     EXPECT(one(t, xn, 3, 1.0f, out, 3), MLMAP_ERR_NAN_LOGIT);
     /* Nothing written on failure. */
     CHECK(out[0] == -7.0f && out[1] == -7.0f && out[2] == -7.0f);
+    /* Scores may not be written into the table. */
+    EXPECT(one(t, x, 3, 1.0f, (float *)((char *)t + 64), 3), MLMAP_ERR_OVERLAP);
+    mlmap_limits_t l;
+    mlmap_limits(&l);
+    EXPECT(batch(t, x, 1, 3, NULL, (float *)((char *)t + l.table_size - 8), 3, &done),
+           MLMAP_ERR_OVERLAP);
     /* A longer buffer gets K scores, the rest untouched; infinities are valid. */
     float xi[3] = {INFINITY, -INFINITY, 0.0f};
     EXPECT(one(t, xi, 3, 1.0f, out, 4), MLMAP_OK);

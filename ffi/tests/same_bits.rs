@@ -65,7 +65,16 @@ fn c_api_scores_equal_the_rust_layer_bit_for_bit() {
     let mut done = 0usize;
     // SAFETY: rows * 3 floats in and out, rows objectness values.
     let s = unsafe {
-        mlmap_bayes_batch(t, xs.as_ptr(), dets.len(), 3, os.as_ptr(), out.as_mut_ptr(), out.len(), &mut done)
+        mlmap_bayes_batch(
+            t,
+            xs.as_ptr(),
+            dets.len(),
+            3,
+            os.as_ptr(),
+            out.as_mut_ptr(),
+            out.len(),
+            &mut done,
+        )
     };
     assert_eq!((s, done), (mlmap_status_t::MLMAP_OK, dets.len()));
     let rows: Vec<[f32; 3]> = dets.iter().map(|(x, _)| *x).collect();
@@ -82,7 +91,10 @@ fn every_status_has_a_distinct_description() {
         assert_eq!(*s as i32, i as i32);
         // SAFETY: a static NUL-terminated string.
         let d = unsafe { std::ffi::CStr::from_ptr(mlmap_status_str(*s as i32)) };
-        assert!(!d.is_empty() && d != unknown && seen.insert(d.to_owned()), "{s:?}");
+        assert!(
+            !d.is_empty() && d != unknown && seen.insert(d.to_owned()),
+            "{s:?}"
+        );
     }
     let next = unsafe { std::ffi::CStr::from_ptr(mlmap_status_str(ALL_STATUSES.len() as i32)) };
     assert_eq!(next, unknown);
