@@ -342,6 +342,16 @@ impl<
                 found: header.bayes_shape(),
             });
         }
+        // As `DynTable::from_bytes`: every frequency and term takes 4 bytes of the body, so
+        // a header announcing more than the body holds is malformed (the same error for
+        // the same bytes on the host and here).
+        let terms = categories.saturating_mul(k).saturating_mul(bins_bayes);
+        let floats = k
+            .saturating_mul(bins_ml.saturating_add(bins_map))
+            .saturating_add(terms);
+        if floats.saturating_mul(4) > body.len() {
+            return Err(DecodeError::Malformed);
+        }
         // Each histogram of a class in use holds the announced number of frequencies
         // (a longer sequence is malformed, a shorter one has the wrong bin count).
         let malformed = DecodeError::Malformed;
@@ -353,7 +363,6 @@ impl<
         for h in map.iter_mut() {
             h.freqs.set_len(bins_map);
         }
-        let terms = categories * k * bins_bayes;
         let mut raw_names = [""; K];
         let mut lens = [(0, 0); K];
         Slots {
