@@ -236,13 +236,14 @@ pub(crate) fn validate(
     // terms of logit j, bin b, category c are at (j * B + b) * C + c.
     let log_lambda = math::ln(lambda);
     for i in 0..categories * k {
-        let (c, j) = (i % categories, i / categories);
+        // `max(1)`: no division by zero, whatever the compiler can prove of the loop.
+        let (c, j) = (i % categories.max(1), i / categories.max(1));
         let hist = terms
             .get(j * bins * categories..)
             .unwrap_or(&[])
             .iter()
             .skip(c)
-            .step_by(categories)
+            .step_by(categories.max(1))
             .take(bins);
         let class = u16::try_from(c).unwrap_or(u16::MAX);
         let mut sum = 0.0f32;

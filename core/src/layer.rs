@@ -189,7 +189,7 @@ const TWO_POW_64: f32 = f32::from_bits(0x5f80_0000); // 2^64
 
 /// Turns the unnormalised masses in `a` (each finite and > 0) into scores summing to
 /// `objectness`; see the module docs. `suffix` is scratch space of the same length.
-#[inline]
+#[inline(always)]
 fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
     let mut max = a.iter().copied().fold(0.0f32, f32::max);
     if max < TINY_MAX {
@@ -221,7 +221,7 @@ fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
 }
 
 /// ML scores of one detection into `out` (length K); `suffix` is scratch of length K.
-#[inline]
+#[inline(always)]
 pub(crate) fn ml_into<F: AsRef<[f32]>>(
     hists: &[Histogram<F>],
     lambda: f32,
@@ -240,7 +240,7 @@ pub(crate) fn ml_into<F: AsRef<[f32]>>(
 }
 
 /// MAP scores of one detection into `out` (length K); `suffix` is scratch of length K.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn map_into<F: AsRef<[f32]>, M: Backend>(
     hists: &[Histogram<F>],

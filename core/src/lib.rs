@@ -28,6 +28,7 @@ extern crate std;
 
 pub mod baseline;
 mod bayes;
+mod bounded;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 #[cfg(feature = "alloc")]
@@ -58,6 +59,7 @@ mod view;
 mod wire;
 
 pub use bayes::{BayesView, MAX_LAMBDA_BAYES};
+pub use bounded::{Bounded, BoundedTable};
 pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
 pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
 pub use histogram::{

@@ -17,6 +17,7 @@ pub mod data;
 pub mod dataset;
 mod error;
 pub mod eval;
+pub mod export;
 pub mod fit;
 pub mod metrics;
 pub mod names;

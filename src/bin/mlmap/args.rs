@@ -42,6 +42,8 @@ pub enum Command {
     Inspect(InspectArgs),
     /// Run the whole job on the data shipped in examples/data.
     Demo(DemoArgs),
+    /// Write a table as a C header (its bytes as a `const uint8_t[]`), for C firmware.
+    ExportC(crate::cmd::export_c::ExportCArgs),
 }
 
 /// Flags of `fit`.

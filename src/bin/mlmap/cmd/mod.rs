@@ -5,6 +5,7 @@
 pub mod apply;
 pub mod demo;
 pub mod eval;
+pub mod export_c;
 pub mod fit;
 pub mod inspect;
 pub mod tune;
@@ -21,5 +22,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Eval(a) => eval::run(a),
         Command::Inspect(a) => inspect::run(a),
         Command::Demo(a) => demo::run(a),
+        Command::ExportC(a) => export_c::run(a),
     }
 }

@@ -1,0 +1,157 @@
+#!/usr/bin/env bash
+# The C API (ffi/), run from the repository root:
+#   1. include/mlmap.h equals a fresh cbindgen generation (pinned cbindgen version);
+#   2. the x86-64 static library links into C programs with no panic path (its panic
+#      handler references a symbol defined nowhere; a canary build must fail the link)
+#      and references no allocator;
+#   3. the Rust test of the entry points, and the host C test ffi/tests/host.c: every
+#      function and status, NULL and short buffers, every single-byte corruption,
+#      scores equal bit for bit to `mlmap apply`;
+#   4. the C example ffi/firmware/ on an emulated Cortex-M4F (arm-none-eabi-gcc, the
+#      thumbv7em-none-eabihf static library, QEMU mps2-an386): scores equal bit for bit
+#      to the host library's; a canary build with one perturbed value must fail.
+# Installs cbindgen (cargo install), gcc-arm-none-eabi, libnewlib-arm-none-eabi and
+# qemu-system-arm (apt-get) when missing; without a cross compiler or Cortex-M4F Rust
+# target, step 4 prints SKIPPED loudly.
+set -euo pipefail
+
+section() { printf '\n==== ffi: %s ====\n' "$*"; }
+fail() {
+    printf 'ffi: FAILED: %s\n' "$*" >&2
+    exit 1
+}
+[[ -f Cargo.toml && -d ffi ]] || fail "run from the repository root"
+start=$SECONDS
+CBINDGEN_VERSION=0.29.4
+root=$PWD
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+unset MLMAP_TABLE MLMAP_MAX_CLASSES MLMAP_MAX_BINS MLMAP_MAX_BINS_BAYES
+
+apt_install() { # packages...
+    echo "apt-get install -y --no-install-recommends $*"
+    { apt-get update -qq &&
+        DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@" \
+            >/dev/null; } || echo "ffi: could not install $*"
+}
+
+section "header: include/mlmap.h equals a fresh cbindgen $CBINDGEN_VERSION generation"
+if [[ "$(cbindgen --version 2>/dev/null)" != "cbindgen $CBINDGEN_VERSION" ]]; then
+    echo "cargo install cbindgen --version $CBINDGEN_VERSION --locked"
+    cargo install cbindgen --version "$CBINDGEN_VERSION" --locked --quiet
+fi
+cbindgen --config ffi/cbindgen.toml --output "$work/mlmap.h" ffi 2>"$work/cbindgen.log" ||
+    { cat "$work/cbindgen.log" >&2; fail "cbindgen failed"; }
+if ! diff -u include/mlmap.h "$work/mlmap.h"; then
+    fail "include/mlmap.h is stale: run \`cbindgen --config ffi/cbindgen.toml --output include/mlmap.h ffi\` and commit it"
+fi
+echo "ok: include/mlmap.h is up to date"
+
+section "x86-64 static library (cargo rustc --release --crate-type staticlib: LTO)"
+(cd ffi && cargo rustc --release --crate-type staticlib --quiet)
+lib=ffi/target/release/libmlmap_ffi.a
+ls -l "$lib"
+for tool in cc readelf; do
+    command -v "$tool" >/dev/null || fail "\`$tool\` not found"
+done
+CFLAGS=(-std=c11 -O2 -Wall -Wextra -Werror -Iinclude)
+
+section "no allocator: no undefined malloc/free/__rust_alloc in the library"
+undefined=$(readelf -sW "$lib" | awk '$7 == "UND" { print $8 }' | sort -u)
+grep -qx memcpy <<<"$undefined" || fail "readelf lists no undefined memcpy: the check is blind"
+if grep -xE 'malloc|calloc|realloc|free|aligned_alloc|posix_memalign|__rust_alloc|__rust_dealloc|__rust_realloc|__rust_alloc_zeroed' <<<"$undefined"; then
+    fail "the static library needs an allocator"
+fi
+echo "ok: $(wc -l <<<"$undefined") undefined symbols, none an allocator"
+
+section "no panic path: the host test links; a canary library must not"
+cc "${CFLAGS[@]}" ffi/tests/host.c -Wl,--gc-sections "$lib" -lm -o "$work/host"
+echo "ok: ffi/tests/host.c (every entry point) links without mlmap_panic_path_reachable"
+(cd ffi && cargo rustc --release --crate-type staticlib --features canary --quiet \
+    --target-dir target/canary)
+if cc "${CFLAGS[@]}" ffi/tests/host.c -Wl,--gc-sections ffi/target/canary/release/libmlmap_ffi.a \
+    -lm -o "$work/canary" 2>"$work/canary.log"; then
+    fail "the canary library linked: a reachable panic would not fail the link"
+fi
+grep -q mlmap_panic_path_reachable "$work/canary.log" ||
+    { cat "$work/canary.log" >&2; fail "the canary link failed, but not on the panic symbol"; }
+echo "ok: the canary build fails to link on mlmap_panic_path_reachable"
+
+section "Rust test of the C entry points (cargo test --release --features std)"
+(cd ffi && cargo test --release --features std --quiet)
+
+section "host C test against \`mlmap apply\`"
+cargo build --release --features cli --bin mlmap --quiet
+mlmap=target/release/mlmap
+"$mlmap" apply --table tables/default.mlmap --input examples/data/test.csv --output "$work/apply.csv"
+"$work/host" tables/default.mlmap tests/golden/layer/small.mlmap examples/data/test.csv \
+    "$work/apply.csv" | tee "$work/host.log"
+grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/host.log" || fail "the host C test did not pass"
+
+section "Cortex-M4F C example"
+# shellcheck source=.ci/thumb-toolchain.sh
+source .ci/thumb-toolchain.sh
+command -v arm-none-eabi-gcc >/dev/null && [[ -d /usr/lib/arm-none-eabi/newlib ]] ||
+    apt_install gcc-arm-none-eabi libnewlib-arm-none-eabi
+command -v qemu-system-arm >/dev/null || apt_install qemu-system-arm
+thumb_acquire
+if ! command -v arm-none-eabi-gcc >/dev/null || ! command -v qemu-system-arm >/dev/null ||
+    [[ "$THUMB_VIA" == none ]]; then
+    cat <<BANNER
+
+##########################################################################
+##  SKIPPED: the C example on the emulated Cortex-M4F
+##  arm-none-eabi-gcc: $(command -v arm-none-eabi-gcc || echo missing)
+##  qemu-system-arm:   $(command -v qemu-system-arm || echo missing)
+##  Rust target $THUMB_TARGET: $THUMB_VIA
+##  This proof did NOT run.
+##########################################################################
+
+BANNER
+    exit 0
+fi
+arm-none-eabi-gcc --version | head -n 1
+(cd ffi && thumb_cargo rustc --profile release-size --crate-type staticlib --quiet)
+thumb_lib="ffi/$(cd ffi && thumb_out_dir release-size)/libmlmap_ffi.a"
+ls -l "$thumb_lib"
+
+fw=ffi/firmware
+"$mlmap" export-c --table tables/default.mlmap --output "$work/table.h"
+cc "${CFLAGS[@]}" -I"$fw" "$fw/gen_expected.c" -Wl,--gc-sections "$lib" -lm -o "$work/gen_expected"
+"$work/gen_expected" tables/default.mlmap >"$work/expected.h"
+ARM=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -std=c11 -Os -g -Wall -Wextra
+    -Werror -ffunction-sections -fdata-sections -Iinclude -I"$fw" -I"$work")
+link_fw() { # $1 = output ELF, rest = extra flags
+    local out=$1
+    shift
+    arm-none-eabi-gcc "${ARM[@]}" "$@" -nostartfiles -T "$fw/link.ld" -Wl,--gc-sections \
+        -Wl,--no-warn-rwx-segments "$fw/startup.c" "$fw/main.c" "$thumb_lib" \
+        --specs=nano.specs -lc -lgcc -o "$out" 2> >(grep -v 'GNU-stack\|deprecated' >&2)
+}
+run_qemu() { # $1 = ELF
+    timeout 120 qemu-system-arm -cpu cortex-m4 -machine mps2-an386 -nographic \
+        -semihosting-config enable=on,target=native -kernel "$1" </dev/null
+}
+link_fw "$work/fw.elf"
+link_fw "$work/canary.elf" -DMLMAP_CANARY
+if arm-none-eabi-nm "$work/fw.elf" | grep -wE '_?(malloc|calloc|realloc|free|_sbrk|_malloc_r)$'; then
+    fail "the firmware image contains an allocator"
+fi
+echo "ok: no allocator symbol in the firmware image"
+arm-none-eabi-size -A "$work/fw.elf" | grep -E '^\.(vectors|text|rodata|data|bss) '
+
+status=0
+run_qemu "$work/canary.elf" >"$work/canary-run.log" 2>&1 || status=$?
+sed 's/^/canary| /' "$work/canary-run.log"
+[[ $status -ne 0 && $status -ne 124 ]] || fail "the canary firmware did not fail (status $status)"
+grep -qE '^[0-9]+ passed, [1-9][0-9]* failed$' "$work/canary-run.log" ||
+    fail "the canary firmware did not report its failure"
+echo "ok: the canary firmware failed as it must (exit status $status)"
+
+status=0
+run_qemu "$work/fw.elf" 2>&1 | tee "$work/run.log" || status=$?
+[[ $status -eq 0 ]] || fail "the C example exited with status $status"
+grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/run.log" ||
+    fail "the C example did not report 'N passed, 0 failed'"
+
+section "passed in $((SECONDS - start)) s (root: $root)"

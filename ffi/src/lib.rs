@@ -1,0 +1,1112 @@
+//! The C API of mlmap: decode a table into storage the caller owns, score detections with
+//! the ML, MAP and Bayes heads, and take the tie-safe decision. `include/mlmap.h` is
+//! generated from this file by cbindgen; every doc comment here is a Doxygen comment
+//! there.
+//!
+//! Rules every function keeps: it never allocates, never panics and never aborts; it
+//! checks every pointer (NULL, alignment) and every length before touching memory, and
+//! returns an [`mlmap_status_t`]; it writes its outputs only on success (batches: the rows
+//! before a failing row). Inputs and outputs may overlap (scoring in place is fine):
+//! inputs are copied before any output is written.
+#![cfg_attr(not(feature = "std"), no_std)]
+#![deny(missing_docs)]
+#![deny(unsafe_op_in_unsafe_fn)]
+#![allow(non_camel_case_types)]
+#![allow(clippy::missing_safety_doc)] // every entry point documents its contract in prose
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::indexing_slicing
+    )
+)]
+
+use core::ffi::c_char;
+use core::mem::{align_of, size_of};
+use core::ptr;
+
+use mlmap::{
+    decide, Bounded, BoundedTable, DecodeError, EdgeMode, FastMath, InferError, Libm, TableView,
+    UpperTail,
+};
+
+mod limits {
+    include!(concat!(env!("OUT_DIR"), "/limits.rs"));
+}
+use limits::{FAST_CLASSES, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES, MAX_CLASSES};
+
+/// The table type behind the opaque `mlmap_table_t`.
+type Inner = BoundedTable<MAX_CLASSES, MAX_BINS, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES>;
+
+/// The view scoring runs on.
+type View<'a> = TableView<'a, Bounded<MAX_BINS>, Bounded<MAX_BINS>>;
+
+/// What `mlmap_table_t` holds: a tag saying that a table was decoded into it, and the
+/// table. All zeros (a zero-initialised `static`) is "no table".
+#[repr(C)]
+struct Storage {
+    tag: u64,
+    table: Inner,
+}
+
+/// Written into [`Storage::tag`] when a decode succeeds.
+const TAG: u64 = u64::from_le_bytes(*b"MLMPtab1");
+
+/// `MLMAP_TABLE_SIZE` of the header, in 8-byte words: an upper bound of the size of
+/// [`Storage`] for any maximum shape (the header computes the same formula, and the
+/// assertion below checks the bound at compile time).
+const fn table_words(classes: usize, bins: usize, bins_bayes: usize) -> usize {
+    (256 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes)).div_ceil(8)
+}
+
+const _: () =
+    assert!(size_of::<Storage>() <= 8 * table_words(MAX_CLASSES, MAX_BINS, MAX_BINS_BAYES));
+const _: () = assert!(align_of::<Storage>() <= MLMAP_TABLE_ALIGN);
+
+/// An all-zero table is a valid, empty table: const evaluation rejects this item if a
+/// zero byte pattern were not a valid value (an enum or a reference field), so
+/// zeroing a `mlmap_table_t` before decoding into it is sound.
+#[allow(dead_code)]
+const ZEROED_TABLE_IS_VALID: BoundedTable<2, 1, 1, 1, 3> =
+    // SAFETY: checked by const evaluation, see above.
+    unsafe { core::mem::zeroed() };
+
+/// Alignment of `mlmap_table_t` in bytes.
+pub const MLMAP_TABLE_ALIGN: usize = 8;
+
+/// Longest class name in bytes, without the terminating NUL.
+pub const MLMAP_NAME_MAX: usize = 31;
+const _: () = assert!(MLMAP_NAME_MAX == mlmap::NAME_MAX);
+
+/// Opaque storage of one table (defined in the header, sized by the `MLMAP_MAX_*`
+/// macros). Only the library reads or writes its contents.
+pub struct mlmap_table_t {
+    _opaque: [u64; 0],
+}
+
+/// The result of every function: `MLMAP_OK` or the reason for the failure.
+///
+/// Values are stable; `mlmap_status_str()` gives a one-line description of each.
+#[repr(i32)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum mlmap_status_t {
+    /// Success.
+    MLMAP_OK = 0,
+    /// A pointer argument that must not be NULL is NULL.
+    MLMAP_ERR_NULL_POINTER = 1,
+    /// A pointer is not aligned for its type (`mlmap_table_t`: `MLMAP_TABLE_ALIGN`,
+    /// `float`: 4, `size_t`: its own size).
+    MLMAP_ERR_MISALIGNED = 2,
+    /// The table storage is smaller than the library needs: the header's `MLMAP_MAX_*`
+    /// macros differ from the library's build (see `mlmap_limits`).
+    MLMAP_ERR_STORAGE_TOO_SMALL = 3,
+    /// The table storage holds no table: never decoded into, or the last decode failed.
+    MLMAP_ERR_NO_TABLE = 4,
+    /// An output overlaps the table storage (the bytes decoded into it, or the
+    /// scores of a detection).
+    MLMAP_ERR_OVERLAP = 5,
+    /// Decode: the input is shorter than the smallest table.
+    MLMAP_ERR_TRUNCATED = 6,
+    /// Decode: the input does not start with the magic `MLMP`.
+    MLMAP_ERR_NOT_A_TABLE = 7,
+    /// Decode: the CRC-32 does not match the contents.
+    MLMAP_ERR_CORRUPTED = 8,
+    /// Decode: a format version this library does not read.
+    MLMAP_ERR_UNSUPPORTED_VERSION = 9,
+    /// Decode: more classes, ML bins or MAP bins than `MLMAP_MAX_CLASSES` and
+    /// `MLMAP_MAX_BINS` allow.
+    MLMAP_ERR_SHAPE_TOO_LARGE = 10,
+    /// Decode: a Bayes head with more bins than `MLMAP_MAX_BINS_BAYES`.
+    MLMAP_ERR_BAYES_SHAPE_TOO_LARGE = 11,
+    /// Decode: the body does not follow the format.
+    MLMAP_ERR_MALFORMED = 12,
+    /// Decode: the body parsed, but a table invariant does not hold.
+    MLMAP_ERR_INVALID_TABLE = 13,
+    /// Scoring: a logit is NaN.
+    MLMAP_ERR_NAN_LOGIT = 14,
+    /// Scoring: the objectness is NaN or outside [0, 1].
+    MLMAP_ERR_OBJECTNESS = 15,
+    /// A count does not match: logits per detection other than the table's K, or a
+    /// count of 0 where one is needed.
+    MLMAP_ERR_LENGTH = 16,
+    /// An output buffer is too short (scores: K per detection; names: the name and
+    /// its NUL).
+    MLMAP_ERR_BUFFER_TOO_SMALL = 17,
+    /// The Bayes head was asked for and the table has none.
+    MLMAP_ERR_NO_BAYES_HEAD = 18,
+    /// A class index is not below K.
+    MLMAP_ERR_CLASS_INDEX = 19,
+    /// No class has the given name.
+    MLMAP_ERR_NOT_FOUND = 20,
+    /// A length is so large that it cannot describe memory (above `PTRDIFF_MAX`
+    /// bytes).
+    MLMAP_ERR_TOO_LARGE = 21,
+}
+
+use mlmap_status_t::*;
+
+/// Statuses in code order (tests and `mlmap_status_str`).
+#[doc(hidden)]
+pub const ALL_STATUSES: [mlmap_status_t; 22] = [
+    MLMAP_OK,
+    MLMAP_ERR_NULL_POINTER,
+    MLMAP_ERR_MISALIGNED,
+    MLMAP_ERR_STORAGE_TOO_SMALL,
+    MLMAP_ERR_NO_TABLE,
+    MLMAP_ERR_OVERLAP,
+    MLMAP_ERR_TRUNCATED,
+    MLMAP_ERR_NOT_A_TABLE,
+    MLMAP_ERR_CORRUPTED,
+    MLMAP_ERR_UNSUPPORTED_VERSION,
+    MLMAP_ERR_SHAPE_TOO_LARGE,
+    MLMAP_ERR_BAYES_SHAPE_TOO_LARGE,
+    MLMAP_ERR_MALFORMED,
+    MLMAP_ERR_INVALID_TABLE,
+    MLMAP_ERR_NAN_LOGIT,
+    MLMAP_ERR_OBJECTNESS,
+    MLMAP_ERR_LENGTH,
+    MLMAP_ERR_BUFFER_TOO_SMALL,
+    MLMAP_ERR_NO_BAYES_HEAD,
+    MLMAP_ERR_CLASS_INDEX,
+    MLMAP_ERR_NOT_FOUND,
+    MLMAP_ERR_TOO_LARGE,
+];
+
+impl From<DecodeError> for mlmap_status_t {
+    fn from(e: DecodeError) -> Self {
+        match e {
+            DecodeError::Truncated => MLMAP_ERR_TRUNCATED,
+            DecodeError::NotATable => MLMAP_ERR_NOT_A_TABLE,
+            DecodeError::Corrupted => MLMAP_ERR_CORRUPTED,
+            DecodeError::UnsupportedVersion { .. } => MLMAP_ERR_UNSUPPORTED_VERSION,
+            DecodeError::ShapeMismatch { .. } => MLMAP_ERR_SHAPE_TOO_LARGE,
+            DecodeError::BayesShapeMismatch { .. } => MLMAP_ERR_BAYES_SHAPE_TOO_LARGE,
+            DecodeError::Invalid(_) => MLMAP_ERR_INVALID_TABLE,
+            _ => MLMAP_ERR_MALFORMED,
+        }
+    }
+}
+
+impl From<InferError> for mlmap_status_t {
+    fn from(e: InferError) -> Self {
+        match e {
+            InferError::NanLogit { .. } => MLMAP_ERR_NAN_LOGIT,
+            InferError::Objectness => MLMAP_ERR_OBJECTNESS,
+            InferError::NoBayesHead => MLMAP_ERR_NO_BAYES_HEAD,
+            _ => MLMAP_ERR_LENGTH,
+        }
+    }
+}
+
+/// The maximum shape this library was built for, and the storage it needs.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct mlmap_limits_t {
+    /// `MLMAP_MAX_CLASSES` of the library's build.
+    pub max_classes: usize,
+    /// `MLMAP_MAX_BINS` of the library's build (ML and MAP heads).
+    pub max_bins: usize,
+    /// `MLMAP_MAX_BINS_BAYES` of the library's build (0: no Bayes head).
+    pub max_bins_bayes: usize,
+    /// Bytes of table storage the library uses (at most `MLMAP_TABLE_SIZE`).
+    pub table_size: usize,
+}
+
+/// The shape of a decoded table.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct mlmap_shape_t {
+    /// Number of classes K (the length of every logit and score vector).
+    pub classes: usize,
+    /// Bins of the ML head's histograms.
+    pub bins_ml: usize,
+    /// Bins of the MAP head's histograms.
+    pub bins_map: usize,
+    /// Bins per logit of the Bayes head; 0 when the table has none.
+    pub bins_bayes: usize,
+    /// Categories of the Bayes head: K, or K + 1 with `background`; 0 without a head.
+    pub categories: usize,
+}
+
+/// The hyper-parameters and policies of a decoded table.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct mlmap_settings_t {
+    /// Additive smoothing of the ML head.
+    pub lambda_ml: f32,
+    /// Additive smoothing of the MAP head.
+    pub lambda_map: f32,
+    /// Smoothing of the Bayes head; 0 when the table has none.
+    pub lambda_bayes: f32,
+    /// Above the last edge: 0 = likelihood 0 (the paper's), 1 = the last bin's.
+    pub upper_tail: i32,
+    /// How the fit placed the edges: 0 = numpy's linspace, 1 = MATLAB's (informational).
+    pub edge_mode: i32,
+}
+
+/// Checks a pointer for NULL and alignment.
+#[inline(always)]
+fn check_ptr<T>(p: *const T) -> Result<(), mlmap_status_t> {
+    if p.is_null() {
+        Err(MLMAP_ERR_NULL_POINTER)
+    } else if !p.is_aligned() {
+        Err(MLMAP_ERR_MISALIGNED)
+    } else {
+        Ok(())
+    }
+}
+
+/// The decoded table in `table`.
+///
+/// # Safety
+///
+/// `table` is NULL or points to a `mlmap_table_t` that is zeroed or was passed to
+/// [`mlmap_table_decode`] (with a large enough size, which the tag proves).
+#[inline(always)]
+unsafe fn table_ref<'a>(table: *const mlmap_table_t) -> Result<&'a Inner, mlmap_status_t> {
+    let storage = table.cast::<Storage>();
+    check_ptr(storage)?;
+    // SAFETY: non-NULL and aligned; the caller's storage is at least the tag's size.
+    let tag = unsafe { ptr::addr_of!((*storage).tag).read() };
+    if tag != TAG {
+        return Err(MLMAP_ERR_NO_TABLE);
+    }
+    // SAFETY: the tag is only written after a successful decode into storage of at
+    // least `size_of::<Storage>()` bytes, which then holds a valid `Storage`.
+    Ok(unsafe { &(*storage).table })
+}
+
+/// The view of a decoded table.
+#[inline(always)]
+unsafe fn view<'a>(table: *const mlmap_table_t) -> Result<View<'a>, mlmap_status_t> {
+    // SAFETY: forwarded contract.
+    unsafe { table_ref(table) }?
+        .view()
+        .ok_or(MLMAP_ERR_NO_TABLE)
+}
+
+/// Writes `value` through an output pointer.
+#[inline(always)]
+unsafe fn put<T>(out: *mut T, value: T) -> Result<(), mlmap_status_t> {
+    check_ptr(out)?;
+    // SAFETY: non-NULL and aligned; the caller promises it points to a `T`.
+    unsafe { out.write(value) };
+    Ok(())
+}
+
+/// The status of a result.
+#[inline(always)]
+fn status(r: Result<(), mlmap_status_t>) -> mlmap_status_t {
+    match r {
+        Ok(()) => MLMAP_OK,
+        Err(s) => s,
+    }
+}
+
+/// Reports the maximum table shape the library was built for and the storage it uses.
+///
+/// A program built with other `MLMAP_MAX_*` macros than the library can detect it
+/// here at start-up (`mlmap_table_decode` also refuses storage that is too small).
+///
+/// @param[out] limits Receives the limits.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_limits(limits: *mut mlmap_limits_t) -> mlmap_status_t {
+    #[cfg(feature = "canary")]
+    if core::hint::black_box(limits as usize) == 1 {
+        panic!("canary");
+    }
+    let value = mlmap_limits_t {
+        max_classes: MAX_CLASSES,
+        max_bins: MAX_BINS,
+        max_bins_bayes: MAX_BINS_BAYES,
+        table_size: size_of::<Storage>(),
+    };
+    // SAFETY: the caller passes a pointer to a `mlmap_limits_t` or NULL.
+    status(unsafe { put(limits, value) })
+}
+
+/// Decodes and validates a table (a `.mlmap` file's bytes) into `table`.
+///
+/// Checks, in order: the magic, the CRC-32, the format version, the shape against the
+/// library's maximum, the body's syntax and every table invariant; the same checks,
+/// with the same outcome, as the Rust `Table::from_bytes`. Any table the storage held
+/// before is discarded first: on failure the storage holds no table, and every
+/// function given it returns `MLMAP_ERR_NO_TABLE`. The bytes are not used after the
+/// call returns.
+///
+/// Costs one pass over `table_size` bytes (zeroing) and one over the input; uses a
+/// few hundred bytes of stack.
+///
+/// @param[out] table Storage for the table: a `mlmap_table_t`, aligned to
+///   `MLMAP_TABLE_ALIGN` (a `static mlmap_table_t` is).
+/// @param table_size `sizeof` the storage, at least `mlmap_limits().table_size`.
+/// @param bytes The table's bytes; must not overlap the storage.
+/// @param len Number of bytes.
+/// @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, and
+///   each decode error: `MLMAP_ERR_TRUNCATED`, `MLMAP_ERR_NOT_A_TABLE`,
+///   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`,
+///   `MLMAP_ERR_SHAPE_TOO_LARGE`, `MLMAP_ERR_BAYES_SHAPE_TOO_LARGE`,
+///   `MLMAP_ERR_MALFORMED`, `MLMAP_ERR_INVALID_TABLE`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_table_decode(
+    table: *mut mlmap_table_t,
+    table_size: usize,
+    bytes: *const u8,
+    len: usize,
+) -> mlmap_status_t {
+    // SAFETY: forwarded contract.
+    status(unsafe { decode(table, table_size, bytes, len) })
+}
+
+unsafe fn decode(
+    table: *mut mlmap_table_t,
+    table_size: usize,
+    bytes: *const u8,
+    len: usize,
+) -> Result<(), mlmap_status_t> {
+    let storage = table.cast::<Storage>();
+    check_ptr(storage)?;
+    check_ptr(bytes)?;
+    let need = size_of::<Storage>();
+    if table_size < need {
+        return Err(MLMAP_ERR_STORAGE_TOO_SMALL);
+    }
+    if len > isize::MAX as usize {
+        return Err(MLMAP_ERR_TOO_LARGE);
+    }
+    let (s, b) = (storage as usize, bytes as usize);
+    if b < s.saturating_add(need) && s < b.saturating_add(len) {
+        return Err(MLMAP_ERR_OVERLAP);
+    }
+    // SAFETY: `storage` is non-NULL, aligned and points to `table_size >= need` bytes
+    // the caller owns; all zeros is a valid `Storage` (tag 0: no table, and an empty
+    // table, see `ZEROED_TABLE_IS_VALID`).
+    let storage = unsafe {
+        ptr::write_bytes(storage, 0, 1);
+        &mut *storage
+    };
+    // SAFETY: `bytes` is non-NULL and the caller promises `len` readable bytes, which
+    // do not overlap the storage (checked above).
+    let bytes = unsafe { core::slice::from_raw_parts(bytes, len) };
+    storage.table.decode(bytes)?;
+    storage.tag = TAG;
+    Ok(())
+}
+
+/// Gives the number of classes K of a decoded table.
+///
+/// @param table A decoded table.
+/// @param[out] classes Receives K.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_NO_TABLE`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_class_count(
+    table: *const mlmap_table_t,
+    classes: *mut usize,
+) -> mlmap_status_t {
+    // SAFETY: the caller passes a table storage and a `size_t` pointer (or NULL).
+    status(unsafe { view(table).and_then(|v| put(classes, v.k())) })
+}
+
+/// Gives the shape of a decoded table.
+///
+/// @param table A decoded table.
+/// @param[out] shape Receives the shape.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_NO_TABLE`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_shape(
+    table: *const mlmap_table_t,
+    shape: *mut mlmap_shape_t,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_class_count`.
+    status(unsafe {
+        view(table).and_then(|v| {
+            let bayes = v.bayes();
+            put(
+                shape,
+                mlmap_shape_t {
+                    classes: v.k(),
+                    bins_ml: v.bins_ml(),
+                    bins_map: v.bins_map(),
+                    bins_bayes: bayes.map_or(0, |b| b.bins()),
+                    categories: bayes.map_or(0, |b| b.categories()),
+                },
+            )
+        })
+    })
+}
+
+/// Gives the settings of a decoded table.
+///
+/// @param table A decoded table.
+/// @param[out] settings Receives the settings.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_NO_TABLE`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_settings(
+    table: *const mlmap_table_t,
+    settings: *mut mlmap_settings_t,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_class_count`.
+    status(unsafe {
+        view(table).and_then(|v| {
+            let s = v.settings();
+            put(
+                settings,
+                mlmap_settings_t {
+                    lambda_ml: s.lambda_ml,
+                    lambda_map: s.lambda_map,
+                    lambda_bayes: v.bayes().map_or(0.0, |b| b.lambda()),
+                    upper_tail: match s.upper_tail {
+                        UpperTail::Zero => 0,
+                        UpperTail::Clamp => 1,
+                    },
+                    edge_mode: match s.edge_mode {
+                        EdgeMode::Linspace => 0,
+                        EdgeMode::Matlab => 1,
+                    },
+                },
+            )
+        })
+    })
+}
+
+/// Copies the name of class `class_index` into `buf` as a NUL-terminated UTF-8 string.
+///
+/// A buffer of `MLMAP_NAME_MAX + 1` bytes always suffices.
+///
+/// @param table A decoded table.
+/// @param class_index The class, below K.
+/// @param[out] buf Receives the name and a NUL; untouched on failure.
+/// @param buf_len Size of `buf` in bytes.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_CLASS_INDEX`, `MLMAP_ERR_BUFFER_TOO_SMALL`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_class_name(
+    table: *const mlmap_table_t,
+    class_index: usize,
+    buf: *mut c_char,
+    buf_len: usize,
+) -> mlmap_status_t {
+    // SAFETY: the caller passes a table storage and `buf_len` writable bytes at `buf`.
+    status(unsafe { class_name(table, class_index, buf, buf_len) })
+}
+
+unsafe fn class_name(
+    table: *const mlmap_table_t,
+    class_index: usize,
+    buf: *mut c_char,
+    buf_len: usize,
+) -> Result<(), mlmap_status_t> {
+    // SAFETY: forwarded contract.
+    let v = unsafe { view(table) }?;
+    check_ptr(buf)?;
+    let mut name = [0u8; MLMAP_NAME_MAX + 1];
+    let src = v
+        .class_name(class_index)
+        .ok_or(MLMAP_ERR_CLASS_INDEX)?
+        .as_bytes();
+    let n = src.len();
+    if n >= buf_len {
+        return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
+    }
+    // Copied out first: `buf` may point into the table storage itself.
+    for (d, s) in name.iter_mut().zip(src) {
+        *d = *s;
+    }
+    // SAFETY: `n + 1 <= buf_len` bytes are writable at `buf`; `name` holds the name
+    // and at least one NUL after it (`n <= MLMAP_NAME_MAX`).
+    unsafe { ptr::copy(name.as_ptr(), buf.cast::<u8>(), n + 1) };
+    Ok(())
+}
+
+/// Finds the class called `name` (`name_len` bytes, no NUL needed).
+///
+/// @param table A decoded table.
+/// @param name The name's bytes.
+/// @param name_len Number of bytes of the name.
+/// @param[out] class_index Receives the class index.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NOT_FOUND`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_class_index(
+    table: *const mlmap_table_t,
+    name: *const c_char,
+    name_len: usize,
+    class_index: *mut usize,
+) -> mlmap_status_t {
+    // SAFETY: the caller passes `name_len` readable bytes at `name`.
+    status(unsafe { class_index_of(table, name, name_len, class_index) })
+}
+
+unsafe fn class_index_of(
+    table: *const mlmap_table_t,
+    name: *const c_char,
+    name_len: usize,
+    class_index: *mut usize,
+) -> Result<(), mlmap_status_t> {
+    // SAFETY: forwarded contract.
+    let v = unsafe { view(table) }?;
+    check_ptr(name)?;
+    check_ptr(class_index)?;
+    if name_len > isize::MAX as usize {
+        return Err(MLMAP_ERR_TOO_LARGE);
+    }
+    // SAFETY: non-NULL, `name_len` readable bytes (the caller's promise).
+    let bytes = unsafe { core::slice::from_raw_parts(name.cast::<u8>(), name_len) };
+    let found = core::str::from_utf8(bytes)
+        .ok()
+        .and_then(|s| v.class_index(s))
+        .ok_or(MLMAP_ERR_NOT_FOUND)?;
+    // SAFETY: checked above.
+    unsafe { put(class_index, found) }
+}
+
+/// Which head scores.
+#[derive(Clone, Copy)]
+enum HeadKind {
+    Ml,
+    Map,
+    Bayes,
+}
+
+/// Scores one detection with `K`, the table's class count, known at compile time: the
+/// layer's loops then have constant trip counts, as for the fixed-size Rust `Table`.
+#[inline(always)]
+fn score_k<const K: usize>(
+    v: &View<'_>,
+    head: HeadKind,
+    x: &[f32],
+    objectness: f32,
+    out: &mut [f32],
+) -> Result<(), InferError> {
+    let (Some(x), Some(out)) = (x.get(..K), out.get_mut(..K)) else {
+        return Err(InferError::Length);
+    };
+    let mut scratch = [0.0f32; K];
+    match head {
+        HeadKind::Ml => v.ml_into(x, objectness, out, &mut scratch),
+        HeadKind::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
+        HeadKind::Bayes => score_bayes(v, x, objectness, out),
+    }
+}
+
+/// The Bayes head, with its scratch of one float per category; the `FastMath` backend,
+/// as `Table::bayes`, so C and Rust give the same bits.
+#[inline(always)]
+fn score_bayes(
+    v: &View<'_>,
+    x: &[f32],
+    objectness: f32,
+    out: &mut [f32],
+) -> Result<(), InferError> {
+    let mut cats = [0.0f32; MAX_CATEGORIES];
+    let c = v.bayes().map_or(0, |b| b.categories());
+    v.bayes_into::<FastMath>(x, objectness, out, cats.get_mut(..c).unwrap_or(&mut []))
+}
+
+/// Scores one detection: logits `x` (K entries) into `out` (K entries).
+#[inline(always)]
+fn score(
+    v: &View<'_>,
+    head: HeadKind,
+    x: &[f32],
+    objectness: f32,
+    out: &mut [f32],
+) -> Result<(), InferError> {
+    // The class counts of FAST_CLASSES (MLMAP_FAST_CLASSES) run specialised code.
+    macro_rules! dispatch {
+        ($($k:literal)*) => {
+            match x.len() {
+                $($k if FAST_CLASSES.contains(&$k) => score_k::<$k>(v, head, x, objectness, out),)*
+                _ => {
+                    let mut scratch = [0.0f32; MAX_CLASSES];
+                    let s = scratch.get_mut(..x.len()).unwrap_or(&mut []);
+                    match head {
+                        HeadKind::Ml => v.ml_into(x, objectness, out, s),
+                        HeadKind::Map => v.map_into::<Libm>(x, objectness, out, s),
+                        HeadKind::Bayes => score_bayes(v, x, objectness, out),
+                    }
+                }
+            }
+        };
+    }
+    dispatch!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+/// Whether the byte ranges `[a, a + a_len)` and `[b, b + b_len)` overlap.
+#[inline(always)]
+fn overlap(a: usize, a_len: usize, b: usize, b_len: usize) -> bool {
+    // `a` in `[b, b + b_len)` or `b` in `[a, a + a_len)`, without overflow.
+    a.wrapping_sub(b) < b_len || b.wrapping_sub(a) < a_len
+}
+
+/// One detection through `head`: the checks of the C API around [`score`].
+#[inline(always)]
+unsafe fn detection(
+    head: HeadKind,
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    n_logits: usize,
+    objectness: f32,
+    out: *mut f32,
+    out_len: usize,
+) -> Result<(), mlmap_status_t> {
+    // SAFETY: forwarded contract.
+    let v = unsafe { view(table) }?;
+    check_ptr(logits)?;
+    check_ptr(out)?;
+    let k = v.k();
+    if n_logits != k {
+        return Err(MLMAP_ERR_LENGTH);
+    }
+    if out_len < k {
+        return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
+    }
+    let bytes = k * size_of::<f32>();
+    if overlap(out as usize, bytes, table as usize, size_of::<Storage>()) {
+        return Err(MLMAP_ERR_OVERLAP);
+    }
+    if !overlap(out as usize, bytes, logits as usize, bytes) {
+        // SAFETY: `k` readable floats at `logits` and `k <= out_len` writable ones at
+        // `out` (the caller's promise), non-NULL and aligned (checked), disjoint from
+        // each other and from the table (checked).
+        let (x, o) = unsafe {
+            (
+                core::slice::from_raw_parts(logits, k),
+                core::slice::from_raw_parts_mut(out, k),
+            )
+        };
+        return Ok(score(&v, head, x, objectness, o)?);
+    }
+    // In place: the logits are copied first.
+    let mut x = [0.0f32; MAX_CLASSES];
+    let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
+    // SAFETY: as above; `x` is a local array, and `out` no longer overlaps an input.
+    unsafe {
+        ptr::copy_nonoverlapping(logits, x.as_mut_ptr(), k);
+        Ok(score(
+            &v,
+            head,
+            x,
+            objectness,
+            core::slice::from_raw_parts_mut(out, k),
+        )?)
+    }
+}
+
+/// Rows of a batch through `head`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch(
+    head: HeadKind,
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    rows: usize,
+    n_logits: usize,
+    objectness: *const f32,
+    out: *mut f32,
+    out_len: usize,
+    done: *mut usize,
+) -> Result<(), mlmap_status_t> {
+    // SAFETY: forwarded contract.
+    let v = unsafe { view(table) }?;
+    if !done.is_null() {
+        check_ptr(done)?;
+        // SAFETY: non-NULL, aligned, the caller's `size_t`.
+        unsafe { done.write(0) };
+    }
+    check_ptr(logits)?;
+    check_ptr(out)?;
+    if !objectness.is_null() {
+        check_ptr(objectness)?;
+    }
+    let k = v.k();
+    if n_logits != k {
+        return Err(MLMAP_ERR_LENGTH);
+    }
+    let total = rows.checked_mul(k).ok_or(MLMAP_ERR_TOO_LARGE)?;
+    if total > isize::MAX as usize / size_of::<f32>() {
+        return Err(MLMAP_ERR_TOO_LARGE);
+    }
+    if out_len < total {
+        return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
+    }
+    let bytes = total * size_of::<f32>();
+    if overlap(out as usize, bytes, table as usize, size_of::<Storage>()) {
+        return Err(MLMAP_ERR_OVERLAP);
+    }
+    let os_bytes = if objectness.is_null() {
+        0
+    } else {
+        rows * size_of::<f32>()
+    };
+    let in_place = overlap(out as usize, bytes, logits as usize, bytes)
+        || overlap(out as usize, bytes, objectness as usize, os_bytes);
+    let mut x = [0.0f32; MAX_CLASSES];
+    let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
+    for r in 0..rows {
+        let at = r * k;
+        // SAFETY: row `r < rows` of `rows * k` readable floats at `logits`, and of as
+        // many writable ones at `out`; one readable float per row at `objectness`; the
+        // output never overlaps the table (checked). When it overlaps an input, each
+        // row's inputs are copied before its output is written.
+        unsafe {
+            let os = if objectness.is_null() {
+                1.0
+            } else {
+                objectness.add(r).read()
+            };
+            let input: &[f32] = if in_place {
+                ptr::copy(logits.add(at), x.as_mut_ptr(), k);
+                x
+            } else {
+                core::slice::from_raw_parts(logits.add(at), k)
+            };
+            score(
+                &v,
+                head,
+                input,
+                os,
+                core::slice::from_raw_parts_mut(out.add(at), k),
+            )?;
+            if !done.is_null() {
+                done.write(r + 1);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Scores one detection with the ML head: `out[i] = OS (L_i + lambda) / sum_j (L_j +
+/// lambda)` (docs/DESIGN.md §1.2); the scores sum to the objectness.
+///
+/// Bit for bit the scores of the Rust layer and of `mlmap apply` for the same table.
+///
+/// @param table A decoded table.
+/// @param logits The detection's K logits (`±inf` allowed, NaN not).
+/// @param n_logits Number of logits; must be K.
+/// @param objectness The detection's objectness, in [0, 1] (1 if the detector has
+///   none).
+/// @param[out] out Receives the K scores; may be `logits` itself, must not overlap the
+///   table.
+/// @param out_len Number of floats at `out`, at least K.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
+///   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_ml(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    n_logits: usize,
+    objectness: f32,
+    out: *mut f32,
+    out_len: usize,
+) -> mlmap_status_t {
+    // SAFETY: the caller passes `n_logits` floats at `logits`, `out_len` at `out`.
+    status(unsafe {
+        detection(
+            HeadKind::Ml,
+            table,
+            logits,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+        )
+    })
+}
+
+/// Scores one detection with the MAP head: `out[i] = OS (L_i P_i + lambda) / sum_j
+/// (L_j P_j + lambda)`, with the Gaussian prior `P` (docs/DESIGN.md §1.2).
+///
+/// Parameters and statuses as for `mlmap_ml`.
+///
+/// @param table A decoded table.
+/// @param logits The detection's K logits.
+/// @param n_logits Number of logits; must be K.
+/// @param objectness The detection's objectness, in [0, 1].
+/// @param[out] out Receives the K scores.
+/// @param out_len Number of floats at `out`, at least K.
+/// @return As `mlmap_ml`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_map(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    n_logits: usize,
+    objectness: f32,
+    out: *mut f32,
+    out_len: usize,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_ml`.
+    status(unsafe {
+        detection(
+            HeadKind::Map,
+            table,
+            logits,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+        )
+    })
+}
+
+/// Scores one detection with the Bayes head: `out[i] = OS p_i`, with `p` the
+/// posterior over the categories given every logit (docs/DESIGN.md §1.6). With a
+/// `background` category the scores sum to at most the objectness.
+///
+/// @param table A decoded table with a Bayes head.
+/// @param logits The detection's K logits.
+/// @param n_logits Number of logits; must be K.
+/// @param objectness The detection's objectness, in [0, 1].
+/// @param[out] out Receives the K scores.
+/// @param out_len Number of floats at `out`, at least K.
+/// @return As `mlmap_ml`, and `MLMAP_ERR_NO_BAYES_HEAD`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_bayes(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    n_logits: usize,
+    objectness: f32,
+    out: *mut f32,
+    out_len: usize,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_ml`.
+    status(unsafe {
+        detection(
+            HeadKind::Bayes,
+            table,
+            logits,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+        )
+    })
+}
+
+/// Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
+/// `objectness[r]` into row `r` of `out`.
+///
+/// On a row that cannot be scored (NaN logit, bad objectness) the rows before it are
+/// written, the others untouched, its status is returned and `*done` is its index:
+/// resume at `*done + 1`.
+///
+/// @param table A decoded table.
+/// @param logits `rows * n_logits` floats, row-major.
+/// @param rows Number of detections (0 is allowed).
+/// @param n_logits Logits per row; must be K.
+/// @param objectness `rows` floats, or NULL for an objectness of 1 everywhere.
+/// @param[out] out Receives `rows * K` scores; may be `logits` itself, must not
+///   overlap the table.
+/// @param out_len Number of floats at `out`, at least `rows * K`.
+/// @param[out] done If not NULL, receives the number of rows written.
+/// @return As `mlmap_ml`, and `MLMAP_ERR_TOO_LARGE`.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlmap_ml_batch(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    rows: usize,
+    n_logits: usize,
+    objectness: *const f32,
+    out: *mut f32,
+    out_len: usize,
+    done: *mut usize,
+) -> mlmap_status_t {
+    // SAFETY: the caller passes the buffers described above.
+    status(unsafe {
+        batch(
+            HeadKind::Ml,
+            table,
+            logits,
+            rows,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+            done,
+        )
+    })
+}
+
+/// Scores a batch with the MAP head; see `mlmap_ml_batch`.
+///
+/// @param table A decoded table.
+/// @param logits `rows * n_logits` floats, row-major.
+/// @param rows Number of detections.
+/// @param n_logits Logits per row; must be K.
+/// @param objectness `rows` floats, or NULL for 1 everywhere.
+/// @param[out] out Receives `rows * K` scores.
+/// @param out_len Number of floats at `out`.
+/// @param[out] done If not NULL, receives the number of rows written.
+/// @return As `mlmap_ml_batch`.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlmap_map_batch(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    rows: usize,
+    n_logits: usize,
+    objectness: *const f32,
+    out: *mut f32,
+    out_len: usize,
+    done: *mut usize,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_ml_batch`.
+    status(unsafe {
+        batch(
+            HeadKind::Map,
+            table,
+            logits,
+            rows,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+            done,
+        )
+    })
+}
+
+/// Scores a batch with the Bayes head; see `mlmap_ml_batch`.
+///
+/// @param table A decoded table with a Bayes head.
+/// @param logits `rows * n_logits` floats, row-major.
+/// @param rows Number of detections.
+/// @param n_logits Logits per row; must be K.
+/// @param objectness `rows` floats, or NULL for 1 everywhere.
+/// @param[out] out Receives `rows * K` scores.
+/// @param out_len Number of floats at `out`.
+/// @param[out] done If not NULL, receives the number of rows written.
+/// @return As `mlmap_ml_batch`, and `MLMAP_ERR_NO_BAYES_HEAD`.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlmap_bayes_batch(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    rows: usize,
+    n_logits: usize,
+    objectness: *const f32,
+    out: *mut f32,
+    out_len: usize,
+    done: *mut usize,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_ml_batch`.
+    status(unsafe {
+        batch(
+            HeadKind::Bayes,
+            table,
+            logits,
+            rows,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+            done,
+        )
+    })
+}
+
+/// The tie-safe decision (docs/DESIGN.md §1.7): the index of the largest score;
+/// among equal largest scores, the one with the largest logit; among those, the
+/// lowest index. NaN never wins. Use it instead of a plain argmax: a detection that
+/// every histogram calls "I don't know" gets equal scores, and the logits then keep
+/// the detector's ranking.
+///
+/// @param scores The K scores of one detection.
+/// @param logits The same detection's K logits.
+/// @param k Number of scores and logits, at least 1.
+/// @param[out] class_index Receives the decided class.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_TOO_LARGE`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_decide(
+    scores: *const f32,
+    logits: *const f32,
+    k: usize,
+    class_index: *mut usize,
+) -> mlmap_status_t {
+    // SAFETY: the caller passes `k` floats at `scores` and at `logits`.
+    status(unsafe { decide_c(scores, logits, k, class_index) })
+}
+
+unsafe fn decide_c(
+    scores: *const f32,
+    logits: *const f32,
+    k: usize,
+    class_index: *mut usize,
+) -> Result<(), mlmap_status_t> {
+    check_ptr(scores)?;
+    check_ptr(logits)?;
+    check_ptr(class_index)?;
+    if k == 0 {
+        return Err(MLMAP_ERR_LENGTH);
+    }
+    if k > isize::MAX as usize / size_of::<f32>() {
+        return Err(MLMAP_ERR_TOO_LARGE);
+    }
+    // SAFETY: `k` readable floats each (the caller's promise), non-NULL and aligned;
+    // both are only read.
+    let (s, l) = unsafe {
+        (
+            core::slice::from_raw_parts(scores, k),
+            core::slice::from_raw_parts(logits, k),
+        )
+    };
+    let i = decide(s, l);
+    // SAFETY: checked above.
+    unsafe { put(class_index, i) }
+}
+
+/// A one-line English description of a status, as a static NUL-terminated string
+/// (never NULL; an unknown value gives "unknown mlmap status").
+///
+/// @param status A value returned by any function of this API.
+/// @return The description.
+#[no_mangle]
+pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
+    let s: &'static core::ffi::CStr = match status {
+        0 => c"success",
+        1 => c"a pointer argument is NULL",
+        2 => c"a pointer is not aligned for its type",
+        3 => c"the table storage is smaller than the library needs (MLMAP_MAX_* differ from the library's build)",
+        4 => c"the table storage holds no decoded table",
+        5 => c"an output or the table bytes overlap the table storage",
+        6 => c"input is too short to be an mlmap table",
+        7 => c"input does not start with the mlmap magic MLMP",
+        8 => c"table checksum does not match its contents",
+        9 => c"table format version is not supported",
+        10 => c"table has more classes or bins than MLMAP_MAX_CLASSES and MLMAP_MAX_BINS allow",
+        11 => c"table's Bayes head has more bins than MLMAP_MAX_BINS_BAYES allows",
+        12 => c"table body does not follow the mlmap format",
+        13 => c"table breaks an invariant",
+        14 => c"a logit is NaN",
+        15 => c"objectness is NaN or outside [0, 1]",
+        16 => c"a count does not match the table's number of classes, or is 0",
+        17 => c"an output buffer is too short",
+        18 => c"the table has no Bayes head",
+        19 => c"class index is not below the number of classes",
+        20 => c"no class has this name",
+        21 => c"a length is too large to describe memory",
+        _ => c"unknown mlmap status",
+    };
+    s.as_ptr()
+}
+
+#[cfg(not(feature = "std"))]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
+    extern "C" {
+        /// Defined nowhere: a panic path that survives optimisation makes the link of
+        /// any program using the library fail on this symbol.
+        fn mlmap_panic_path_reachable() -> !;
+    }
+    // SAFETY: never executed; a reachable call fails the link.
+    unsafe { mlmap_panic_path_reachable() }
+}

@@ -1,0 +1,619 @@
+/*
+ * Host test of the C API (run by .ci/ffi.sh): every function, every status code, NULL
+ * and short buffers, misaligned pointers, every single-byte corruption of a table, and
+ * scores equal bit for bit to those `mlmap apply` wrote for the same rows.
+ *
+ * usage: host TABLE SMALL_TABLE INPUT_CSV APPLY_CSV
+ *   TABLE        a table with a Bayes head (tables/default.mlmap)
+ *   SMALL_TABLE  a version-1 table without one (tests/golden/layer/small.mlmap)
+ *   INPUT_CSV    detections (id,label,objectness,<class logits>...)
+ *   APPLY_CSV    `mlmap apply --table TABLE --input INPUT_CSV` of them
+ *
+ * Prints one line per failed check and ends with "N passed, M failed"; exits 1 on
+ * any failure.
+ */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mlmap.h"
+
+static unsigned passed, failed;
+
+#define CHECK(cond)                                                       \
+    do {                                                                  \
+        if (cond) {                                                       \
+            passed++;                                                     \
+        } else {                                                          \
+            failed++;                                                     \
+            fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond); \
+        }                                                                 \
+    } while (0)
+
+/* A status check that prints what came back. */
+#define EXPECT(call, want)                                                     \
+    do {                                                                       \
+        mlmap_status_t got_ = (call);                                          \
+        if (got_ == (want)) {                                                  \
+            passed++;                                                          \
+        } else {                                                               \
+            failed++;                                                          \
+            fprintf(stderr, "%s:%d: FAILED: %s\n  returned %d (%s), want %s\n", \
+                    __FILE__, __LINE__, #call, (int)got_,                      \
+                    mlmap_status_str(got_), #want);                            \
+        }                                                                      \
+    } while (0)
+
+static mlmap_table_t table;     /* zero-initialised: no table */
+static mlmap_table_t scratch_t; /* for corruption runs */
+static mlmap_table_t small_t;
+
+static uint8_t *read_file(const char *path, size_t *len) {
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        perror(path);
+        exit(2);
+    }
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    uint8_t *buf = malloc((size_t)n + 1);
+    if (!buf || fread(buf, 1, (size_t)n, f) != (size_t)n) {
+        fprintf(stderr, "%s: cannot read\n", path);
+        exit(2);
+    }
+    fclose(f);
+    buf[n] = 0;
+    *len = (size_t)n;
+    return buf;
+}
+
+/* CRC-32/ISO-HDLC (zlib's), independent of the library's. */
+static uint32_t crc32(const uint8_t *p, size_t n) {
+    uint32_t c = 0xFFFFFFFFu;
+    for (size_t i = 0; i < n; i++) {
+        c ^= p[i];
+        for (int k = 0; k < 8; k++) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+    }
+    return ~c;
+}
+
+static void fix_crc(uint8_t *p, size_t n) {
+    uint32_t c = crc32(p, n - 4);
+    for (int i = 0; i < 4; i++) p[n - 4 + i] = (uint8_t)(c >> (8 * i));
+}
+
+static int same_bits(float a, float b) {
+    uint32_t x, y;
+    memcpy(&x, &a, 4);
+    memcpy(&y, &b, 4);
+    return x == y;
+}
+
+/* ------------------------------------------------------------------------------ */
+
+static void test_limits_and_status_strings(void) {
+    mlmap_limits_t l;
+    EXPECT(mlmap_limits(&l), MLMAP_OK);
+    CHECK(l.max_classes == MLMAP_MAX_CLASSES);
+    CHECK(l.max_bins == MLMAP_MAX_BINS);
+    CHECK(l.max_bins_bayes == MLMAP_MAX_BINS_BAYES);
+    CHECK(l.table_size > 0 && l.table_size <= sizeof(mlmap_table_t));
+    CHECK(sizeof(mlmap_table_t) == MLMAP_TABLE_SIZE);
+    CHECK(_Alignof(mlmap_table_t) >= MLMAP_TABLE_ALIGN);
+    EXPECT(mlmap_limits(NULL), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_limits((mlmap_limits_t *)((char *)&l + 1)), MLMAP_ERR_MISALIGNED);
+
+    /* Every status has its own non-empty description; anything else is unknown. */
+    const char *unknown = mlmap_status_str(-1);
+    CHECK(unknown != NULL && strcmp(unknown, "unknown mlmap status") == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_TOO_LARGE + 1), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(INT32_MAX), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(INT32_MIN), unknown) == 0);
+    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_TOO_LARGE; s++) {
+        const char *d = mlmap_status_str(s);
+        CHECK(d != NULL && d[0] != '\0' && strcmp(d, unknown) != 0);
+        for (int32_t t = MLMAP_OK; t < s; t++) CHECK(strcmp(d, mlmap_status_str(t)) != 0);
+    }
+    CHECK(strcmp(mlmap_status_str(MLMAP_OK), "success") == 0);
+}
+
+/* Every function given storage that holds no table. */
+static void test_no_table(const mlmap_table_t *t) {
+    size_t k = 99, idx = 99, done = 99;
+    mlmap_shape_t shape;
+    mlmap_settings_t settings;
+    char name[32];
+    float x[3] = {1, 2, 3}, out[3];
+    EXPECT(mlmap_class_count(t, &k), MLMAP_ERR_NO_TABLE);
+    CHECK(k == 99);
+    EXPECT(mlmap_shape(t, &shape), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_settings(t, &settings), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_class_name(t, 0, name, sizeof name), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_class_index(t, "car", 3, &idx), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_ml(t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_map(t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_bayes(t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_ml_batch(t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_map_batch(t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_bayes_batch(t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_TABLE);
+}
+
+static void test_decode_arguments(const uint8_t *bytes, size_t len) {
+    mlmap_limits_t l;
+    mlmap_limits(&l);
+    static mlmap_table_t t;
+    EXPECT(mlmap_table_decode(NULL, sizeof t, bytes, len), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_table_decode(&t, sizeof t, NULL, len), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_table_decode(&t, sizeof t, NULL, 0), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_table_decode((mlmap_table_t *)((char *)&t + 4), sizeof t - 8, bytes, len),
+           MLMAP_ERR_MISALIGNED);
+    EXPECT(mlmap_table_decode(&t, l.table_size - 1, bytes, len), MLMAP_ERR_STORAGE_TOO_SMALL);
+    EXPECT(mlmap_table_decode(&t, 0, bytes, len), MLMAP_ERR_STORAGE_TOO_SMALL);
+    EXPECT(mlmap_table_decode(&t, sizeof t, bytes, SIZE_MAX), MLMAP_ERR_TOO_LARGE);
+    /* Bytes inside the storage they would be decoded into. */
+    memcpy((uint8_t *)&t + 64, bytes, len < 1024 ? len : 1024);
+    EXPECT(mlmap_table_decode(&t, sizeof t, (uint8_t *)&t + 64, len), MLMAP_ERR_OVERLAP);
+    test_no_table(&t);
+    /* Exactly the size the library needs is enough. */
+    EXPECT(mlmap_table_decode(&t, l.table_size, bytes, len), MLMAP_OK);
+    size_t k = 0;
+    EXPECT(mlmap_class_count(&t, &k), MLMAP_OK);
+    CHECK(k == 3);
+    /* Misaligned or NULL table pointers for every reader. */
+    const mlmap_table_t *bad = (const mlmap_table_t *)((const char *)&t + 4);
+    float x[3] = {0}, out[3];
+    EXPECT(mlmap_class_count(bad, &k), MLMAP_ERR_MISALIGNED);
+    EXPECT(mlmap_ml(bad, x, 3, 1.0f, out, 3), MLMAP_ERR_MISALIGNED);
+    EXPECT(mlmap_class_count(NULL, &k), MLMAP_ERR_NULL_POINTER);
+}
+
+/* Decode errors, each status from bytes made for it (CRC recomputed). */
+static void test_decode_errors(const uint8_t *bytes, size_t len) {
+    uint8_t *b = malloc(len + 16);
+    mlmap_table_t *t = &scratch_t;
+
+    EXPECT(mlmap_table_decode(t, sizeof *t, bytes, 0), MLMAP_ERR_TRUNCATED);
+    EXPECT(mlmap_table_decode(t, sizeof *t, bytes, 10), MLMAP_ERR_TRUNCATED);
+    EXPECT(mlmap_table_decode(t, sizeof *t, (const uint8_t *)"MLMX", 4), MLMAP_ERR_NOT_A_TABLE);
+
+    memcpy(b, bytes, len);
+    b[0] = 'X';
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_NOT_A_TABLE);
+
+    memcpy(b, bytes, len);
+    b[len / 2] ^= 0x01; /* CRC not fixed */
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_CORRUPTED);
+
+    /* Header: magic, version, K, ML bins, MAP bins, Bayes bins, categories (one byte
+     * each for this table). */
+    CHECK(bytes[4] == 2 && bytes[5] == 3 && bytes[6] == 22 && bytes[7] == 17 &&
+          bytes[8] == 22 && bytes[9] == 4);
+    memcpy(b, bytes, len);
+    b[4] = 3;
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_UNSUPPORTED_VERSION);
+
+    memcpy(b, bytes, len);
+    b[5] = MLMAP_MAX_CLASSES + 1;
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_SHAPE_TOO_LARGE);
+
+    memcpy(b, bytes, len);
+    b[6] = MLMAP_MAX_BINS + 1;
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_SHAPE_TOO_LARGE);
+
+    memcpy(b, bytes, len);
+    b[8] = MLMAP_MAX_BINS_BAYES + 1;
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_BAYES_SHAPE_TOO_LARGE);
+
+    /* Settings: edge mode byte 10 must be 0 or 1. */
+    memcpy(b, bytes, len);
+    b[10] = 7;
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_MALFORMED);
+
+    /* A byte left over after the body. */
+    memcpy(b, bytes, len - 4);
+    b[len - 4] = 0;
+    fix_crc(b, len + 1);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len + 1), MLMAP_ERR_MALFORMED);
+
+    /* lambda_ML (bytes 12..15, f32 LE) set to -1: an invariant. */
+    memcpy(b, bytes, len);
+    float minus_one = -1.0f;
+    memcpy(b + 12, &minus_one, 4);
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_INVALID_TABLE);
+
+    /* A failed decode leaves the storage without a table, even one that held one. */
+    EXPECT(mlmap_table_decode(t, sizeof *t, bytes, len), MLMAP_OK);
+    b[len / 3] ^= 0x80;
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_CORRUPTED);
+    test_no_table(t);
+    free(b);
+}
+
+/* Every single-byte change of the table is rejected (the CRC), every truncation too;
+ * with the CRC recomputed, every single-byte change gives a status, never a crash. */
+static void test_every_corruption(const uint8_t *bytes, size_t len) {
+    uint8_t *b = malloc(len);
+    mlmap_table_t *t = &scratch_t;
+    unsigned accepted = 0, tried = 0, seen[32] = {0};
+    memcpy(b, bytes, len);
+    for (size_t i = 0; i < len; i++) {
+        uint8_t orig = b[i];
+        for (int v = 0; v < 256; v++) {
+            if (v == orig) continue;
+            b[i] = (uint8_t)v;
+            mlmap_status_t s = mlmap_table_decode(t, sizeof *t, b, len);
+            accepted += s == MLMAP_OK;
+            tried++;
+        }
+        b[i] = orig;
+    }
+    CHECK(tried == len * 255);
+    CHECK(accepted == 0);
+    if (accepted) fprintf(stderr, "  %u of %u single-byte corruptions decoded\n", accepted, tried);
+
+    accepted = 0;
+    for (size_t n = 0; n < len; n++) accepted += mlmap_table_decode(t, sizeof *t, bytes, n) == MLMAP_OK;
+    CHECK(accepted == 0);
+
+    /* CRC fixed: the parser and the validation see every change. */
+    unsigned ok = 0, unknown = 0;
+    for (size_t i = 0; i + 4 < len; i++) {
+        for (int v = 0; v < 256; v += 17) {
+            memcpy(b, bytes, len);
+            if (b[i] == v) continue;
+            b[i] = (uint8_t)v;
+            fix_crc(b, len);
+            mlmap_status_t s = mlmap_table_decode(t, sizeof *t, b, len);
+            if (s >= 0 && s < 32) seen[s]++;
+            else unknown++;
+            if (s == MLMAP_OK) {
+                /* Then it is a valid table that scores. */
+                float x[3] = {1.0f, -2.0f, 0.5f}, out[3];
+                ok += mlmap_map(t, x, 3, 1.0f, out, 3) == MLMAP_OK;
+            }
+        }
+    }
+    CHECK(unknown == 0);
+    CHECK(ok == seen[MLMAP_OK]);
+    CHECK(seen[MLMAP_ERR_MALFORMED] > 0 && seen[MLMAP_ERR_INVALID_TABLE] > 0);
+    CHECK(seen[MLMAP_ERR_NOT_A_TABLE] > 0 && seen[MLMAP_ERR_UNSUPPORTED_VERSION] > 0);
+    CHECK(seen[MLMAP_ERR_CORRUPTED] == 0);
+    free(b);
+}
+
+static void test_table_info(const mlmap_table_t *t) {
+    size_t k = 0, idx = 99;
+    EXPECT(mlmap_class_count(t, &k), MLMAP_OK);
+    CHECK(k == 3);
+    EXPECT(mlmap_class_count(t, NULL), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_class_count(t, (size_t *)((char *)&k + 1)), MLMAP_ERR_MISALIGNED);
+
+    mlmap_shape_t shape;
+    EXPECT(mlmap_shape(t, &shape), MLMAP_OK);
+    CHECK(shape.classes == 3 && shape.bins_ml == 22 && shape.bins_map == 17);
+    CHECK(shape.bins_bayes == 22 && shape.categories == 4);
+    EXPECT(mlmap_shape(t, NULL), MLMAP_ERR_NULL_POINTER);
+
+    mlmap_settings_t s;
+    EXPECT(mlmap_settings(t, &s), MLMAP_OK);
+    CHECK(s.lambda_ml > 0.0f && s.lambda_ml <= 1e6f);
+    CHECK(s.lambda_map > 0.0f && s.lambda_map <= 1e6f);
+    CHECK(s.lambda_bayes > 0.0f && s.lambda_bayes <= 1.0f);
+    CHECK(s.upper_tail == 0 || s.upper_tail == 1);
+    CHECK(s.edge_mode == 0 || s.edge_mode == 1);
+    EXPECT(mlmap_settings(t, NULL), MLMAP_ERR_NULL_POINTER);
+
+    const char *names[3] = {"car", "cyclist", "pedestrian"};
+    char buf[MLMAP_NAME_MAX + 1];
+    for (size_t i = 0; i < 3; i++) {
+        memset(buf, 'x', sizeof buf);
+        EXPECT(mlmap_class_name(t, i, buf, sizeof buf), MLMAP_OK);
+        CHECK(strcmp(buf, names[i]) == 0);
+        EXPECT(mlmap_class_index(t, names[i], strlen(names[i]), &idx), MLMAP_OK);
+        CHECK(idx == i);
+    }
+    /* "car" needs 4 bytes with its NUL; the buffer is untouched on failure. */
+    memset(buf, 'x', sizeof buf);
+    EXPECT(mlmap_class_name(t, 0, buf, 3), MLMAP_ERR_BUFFER_TOO_SMALL);
+    CHECK(buf[0] == 'x');
+    EXPECT(mlmap_class_name(t, 0, buf, 0), MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(mlmap_class_name(t, 0, buf, 4), MLMAP_OK);
+    CHECK(strcmp(buf, "car") == 0);
+    EXPECT(mlmap_class_name(t, 3, buf, sizeof buf), MLMAP_ERR_CLASS_INDEX);
+    EXPECT(mlmap_class_name(t, SIZE_MAX, buf, sizeof buf), MLMAP_ERR_CLASS_INDEX);
+    EXPECT(mlmap_class_name(t, 0, NULL, sizeof buf), MLMAP_ERR_NULL_POINTER);
+
+    idx = 99;
+    EXPECT(mlmap_class_index(t, "cyc", 3, &idx), MLMAP_ERR_NOT_FOUND);
+    EXPECT(mlmap_class_index(t, "cyclists", 8, &idx), MLMAP_ERR_NOT_FOUND);
+    EXPECT(mlmap_class_index(t, "\xff\xfe", 2, &idx), MLMAP_ERR_NOT_FOUND);
+    EXPECT(mlmap_class_index(t, "", 0, &idx), MLMAP_ERR_NOT_FOUND);
+    CHECK(idx == 99);
+    EXPECT(mlmap_class_index(t, "car", SIZE_MAX, &idx), MLMAP_ERR_TOO_LARGE);
+    EXPECT(mlmap_class_index(t, NULL, 3, &idx), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_class_index(t, "car", 3, NULL), MLMAP_ERR_NULL_POINTER);
+    /* The name need not be NUL-terminated. */
+    EXPECT(mlmap_class_index(t, "carXYZ", 3, &idx), MLMAP_OK);
+    CHECK(idx == 0);
+}
+
+typedef mlmap_status_t (*one_fn)(const mlmap_table_t *, const float *, size_t, float, float *,
+                                 size_t);
+typedef mlmap_status_t (*batch_fn)(const mlmap_table_t *, const float *, size_t, size_t,
+                                   const float *, float *, size_t, size_t *);
+
+/* Argument checks shared by the three heads. */
+static void test_head_arguments(const mlmap_table_t *t, one_fn one, batch_fn batch,
+                                const char *head) {
+    float x[4] = {1.0f, -2.0f, 0.5f, 0.0f};
+    float out[4] = {-7.0f, -7.0f, -7.0f, -7.0f};
+    float big[16];
+    size_t done = 99;
+    fprintf(stderr, "-- %s\n", head);
+    EXPECT(one(NULL, x, 3, 1.0f, out, 3), MLMAP_ERR_NULL_POINTER);
+    EXPECT(one(t, NULL, 3, 1.0f, out, 3), MLMAP_ERR_NULL_POINTER);
+    EXPECT(one(t, x, 3, 1.0f, NULL, 3), MLMAP_ERR_NULL_POINTER);
+    memcpy(big, x, sizeof x);
+    EXPECT(one(t, (const float *)((const char *)big + 1), 3, 1.0f, out, 3), MLMAP_ERR_MISALIGNED);
+    EXPECT(one(t, x, 3, 1.0f, (float *)((char *)big + 2), 3), MLMAP_ERR_MISALIGNED);
+    EXPECT(one(t, x, 2, 1.0f, out, 3), MLMAP_ERR_LENGTH);
+    EXPECT(one(t, x, 4, 1.0f, out, 4), MLMAP_ERR_LENGTH);
+    EXPECT(one(t, x, 0, 1.0f, out, 3), MLMAP_ERR_LENGTH);
+    EXPECT(one(t, x, 3, 1.0f, out, 2), MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(one(t, x, 3, 1.0f, out, 0), MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(one(t, x, 3, 1.5f, out, 3), MLMAP_ERR_OBJECTNESS);
+    EXPECT(one(t, x, 3, -0.0001f, out, 3), MLMAP_ERR_OBJECTNESS);
+    EXPECT(one(t, x, 3, NAN, out, 3), MLMAP_ERR_OBJECTNESS);
+    float xn[3] = {0.0f, NAN, 1.0f};
+    EXPECT(one(t, xn, 3, 1.0f, out, 3), MLMAP_ERR_NAN_LOGIT);
+    /* Nothing written on failure. */
+    CHECK(out[0] == -7.0f && out[1] == -7.0f && out[2] == -7.0f);
+    /* Scores may not be written into the table. */
+    EXPECT(one(t, x, 3, 1.0f, (float *)((char *)t + 64), 3), MLMAP_ERR_OVERLAP);
+    mlmap_limits_t l;
+    mlmap_limits(&l);
+    EXPECT(batch(t, x, 1, 3, NULL, (float *)((char *)t + l.table_size - 8), 3, &done),
+           MLMAP_ERR_OVERLAP);
+    /* A longer buffer gets K scores, the rest untouched; infinities are valid. */
+    float xi[3] = {INFINITY, -INFINITY, 0.0f};
+    EXPECT(one(t, xi, 3, 1.0f, out, 4), MLMAP_OK);
+    CHECK(out[3] == -7.0f);
+    EXPECT(one(t, x, 3, 0.0f, out, 3), MLMAP_OK);
+    CHECK(out[0] == 0.0f && out[1] == 0.0f && out[2] == 0.0f);
+
+    /* Batches. */
+    float rows[5][3] = {{1, 2, 3}, {-1, 0, 4}, {0, NAN, 0}, {2, 2, 2}, {5, -5, 0}};
+    float os[5] = {1.0f, 0.5f, 0.25f, 0.75f, 0.9f};
+    float bout[5][3];
+    for (int r = 0; r < 5; r++)
+        for (int c = 0; c < 3; c++) bout[r][c] = -7.0f;
+    EXPECT(batch(t, &rows[0][0], 5, 3, os, &bout[0][0], 15, &done), MLMAP_ERR_NAN_LOGIT);
+    CHECK(done == 2);
+    for (int r = 0; r < 2; r++) {
+        float want[3];
+        EXPECT(one(t, rows[r], 3, os[r], want, 3), MLMAP_OK);
+        for (int c = 0; c < 3; c++) CHECK(same_bits(bout[r][c], want[c]));
+    }
+    CHECK(bout[2][0] == -7.0f && bout[4][2] == -7.0f);
+    /* Resume after the bad row; objectness NULL means 1. */
+    EXPECT(batch(t, &rows[3][0], 2, 3, NULL, &bout[3][0], 6, &done), MLMAP_OK);
+    CHECK(done == 2);
+    for (int r = 3; r < 5; r++) {
+        float want[3];
+        EXPECT(one(t, rows[r], 3, 1.0f, want, 3), MLMAP_OK);
+        for (int c = 0; c < 3; c++) CHECK(same_bits(bout[r][c], want[c]));
+    }
+    float os_bad[2] = {0.5f, 2.0f};
+    EXPECT(batch(t, &rows[0][0], 2, 3, os_bad, &bout[0][0], 6, &done), MLMAP_ERR_OBJECTNESS);
+    CHECK(done == 1);
+    EXPECT(batch(t, &rows[0][0], 0, 3, NULL, &bout[0][0], 0, &done), MLMAP_OK);
+    CHECK(done == 0);
+    EXPECT(batch(t, &rows[0][0], 2, 3, NULL, &bout[0][0], 6, NULL), MLMAP_OK);
+    EXPECT(batch(t, &rows[0][0], 2, 3, NULL, &bout[0][0], 5, &done), MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(batch(t, &rows[0][0], 2, 2, NULL, &bout[0][0], 6, &done), MLMAP_ERR_LENGTH);
+    EXPECT(batch(t, &rows[0][0], SIZE_MAX / 2, 3, NULL, &bout[0][0], SIZE_MAX, &done),
+           MLMAP_ERR_TOO_LARGE);
+    EXPECT(batch(t, NULL, 2, 3, NULL, &bout[0][0], 6, &done), MLMAP_ERR_NULL_POINTER);
+    EXPECT(batch(t, &rows[0][0], 2, 3, NULL, NULL, 6, &done), MLMAP_ERR_NULL_POINTER);
+    EXPECT(batch(NULL, &rows[0][0], 2, 3, NULL, &bout[0][0], 6, &done), MLMAP_ERR_NULL_POINTER);
+    EXPECT(batch(t, &rows[0][0], 2, 3, (const float *)((const char *)os + 1), &bout[0][0], 6,
+                 &done),
+           MLMAP_ERR_MISALIGNED);
+    EXPECT(batch(t, &rows[0][0], 2, 3, NULL, &bout[0][0], 6, (size_t *)((char *)&done + 1)),
+           MLMAP_ERR_MISALIGNED);
+
+    /* In place: the scores overwrite the logits. */
+    float inplace[2][3] = {{1, 2, 3}, {-1, 0, 4}}, want[2][3];
+    EXPECT(batch(t, &inplace[0][0], 2, 3, NULL, &want[0][0], 6, NULL), MLMAP_OK);
+    EXPECT(batch(t, &inplace[0][0], 2, 3, NULL, &inplace[0][0], 6, NULL), MLMAP_OK);
+    for (int r = 0; r < 2; r++)
+        for (int c = 0; c < 3; c++) CHECK(same_bits(inplace[r][c], want[r][c]));
+    float single[3] = {-1, 0, 4};
+    EXPECT(one(t, single, 3, 1.0f, single, 3), MLMAP_OK);
+    for (int c = 0; c < 3; c++) CHECK(same_bits(single[c], want[1][c]));
+}
+
+static void test_decide(void) {
+    size_t c = 99;
+    float eq[3] = {0.3f, 0.3f, 0.3f}, lg[3] = {-1.0f, 2.5f, 0.4f};
+    EXPECT(mlmap_decide(eq, lg, 3, &c), MLMAP_OK);
+    CHECK(c == 1);
+    float s[3] = {0.1f, 0.7f, 0.2f}, l2[3] = {9.0f, -9.0f, 9.0f};
+    EXPECT(mlmap_decide(s, l2, 3, &c), MLMAP_OK);
+    CHECK(c == 1);
+    float t2[3] = {0.5f, 0.2f, 0.5f}, l3[3] = {1.0f, 5.0f, 1.0f};
+    EXPECT(mlmap_decide(t2, l3, 3, &c), MLMAP_OK);
+    CHECK(c == 0); /* scores and logits tie: the lowest index */
+    float nan_s[3] = {NAN, 0.2f, 0.1f};
+    EXPECT(mlmap_decide(nan_s, lg, 3, &c), MLMAP_OK);
+    CHECK(c == 1);
+    EXPECT(mlmap_decide(eq, lg, 1, &c), MLMAP_OK);
+    CHECK(c == 0);
+    c = 99;
+    EXPECT(mlmap_decide(eq, lg, 0, &c), MLMAP_ERR_LENGTH);
+    CHECK(c == 99);
+    EXPECT(mlmap_decide(eq, lg, SIZE_MAX, &c), MLMAP_ERR_TOO_LARGE);
+    EXPECT(mlmap_decide(NULL, lg, 3, &c), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_decide(eq, NULL, 3, &c), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_decide(eq, lg, 3, NULL), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_decide((const float *)((const char *)eq + 2), lg, 2, &c), MLMAP_ERR_MISALIGNED);
+}
+
+/* Splits a CSV line in place (no quoting in these files). */
+static int split(char *line, char **fields, int max) {
+    int n = 0;
+    char *p = line;
+    while (n < max) {
+        fields[n++] = p;
+        char *q = strpbrk(p, ",\r\n");
+        if (!q) break;
+        char sep = *q;
+        *q = '\0';
+        if (sep != ',') break;
+        p = q + 1;
+    }
+    return n;
+}
+
+static int column(char **fields, int n, const char *name) {
+    for (int i = 0; i < n; i++)
+        if (strcmp(fields[i], name) == 0) return i;
+    fprintf(stderr, "no column %s\n", name);
+    exit(2);
+}
+
+/* Scores of every row equal, bit for bit, what `mlmap apply` wrote; the batch calls
+ * give the same bits; the Bayes scores are in [0, OS] and sum to at most OS. */
+static void test_against_apply(const mlmap_table_t *t, const char *input, const char *applied) {
+    size_t in_len, ap_len;
+    char *in = (char *)read_file(input, &in_len), *ap = (char *)read_file(applied, &ap_len);
+    char *in_save = NULL, *ap_save = NULL;
+    char *in_line = strtok_r(in, "\n", &in_save), *ap_line = strtok_r(ap, "\n", &ap_save);
+    char *f[64], *g[64];
+    int nf = split(in_line, f, 64), ng = split(ap_line, g, 64);
+    const char *names[3] = {"car", "cyclist", "pedestrian"};
+    int ci[3], cml[3], cmap[3], cos = column(f, nf, "objectness");
+    char name[64];
+    for (int i = 0; i < 3; i++) {
+        ci[i] = column(f, nf, names[i]);
+        snprintf(name, sizeof name, "ml_%s", names[i]);
+        cml[i] = column(g, ng, name);
+        snprintf(name, sizeof name, "map_%s", names[i]);
+        cmap[i] = column(g, ng, name);
+    }
+    enum { MAXR = 20000 };
+    static float xs[MAXR][3], oss[MAXR], ml_want[MAXR][3], map_want[MAXR][3];
+    size_t rows = 0;
+    unsigned ml_diff = 0, map_diff = 0, bayes_bad = 0;
+    while ((in_line = strtok_r(NULL, "\n", &in_save)) && (ap_line = strtok_r(NULL, "\n", &ap_save))) {
+        if (rows == MAXR) break;
+        nf = split(in_line, f, 64);
+        ng = split(ap_line, g, 64);
+        /* The CLI reads numbers as double and narrows them to float; so does this. */
+        for (int i = 0; i < 3; i++) xs[rows][i] = (float)strtod(f[ci[i]], NULL);
+        oss[rows] = (float)strtod(f[cos], NULL);
+        float ml[3], map[3], bayes[3];
+        EXPECT(mlmap_ml(t, xs[rows], 3, oss[rows], ml, 3), MLMAP_OK);
+        EXPECT(mlmap_map(t, xs[rows], 3, oss[rows], map, 3), MLMAP_OK);
+        EXPECT(mlmap_bayes(t, xs[rows], 3, oss[rows], bayes, 3), MLMAP_OK);
+        float sum = 0.0f;
+        for (int i = 0; i < 3; i++) {
+            /* Rust prints the shortest decimal that reads back as the same float. */
+            ml_want[rows][i] = strtof(g[cml[i]], NULL);
+            map_want[rows][i] = strtof(g[cmap[i]], NULL);
+            ml_diff += !same_bits(ml[i], ml_want[rows][i]);
+            map_diff += !same_bits(map[i], map_want[rows][i]);
+            bayes_bad += !(bayes[i] >= 0.0f && bayes[i] <= oss[rows]);
+            sum += bayes[i];
+        }
+        bayes_bad += !(sum <= oss[rows] * (1.0f + 1e-5f));
+        rows++;
+    }
+    fprintf(stderr, "-- %zu rows compared with mlmap apply\n", rows);
+    CHECK(rows >= 1000);
+    CHECK(ml_diff == 0);
+    CHECK(map_diff == 0);
+    CHECK(bayes_bad == 0);
+    if (ml_diff || map_diff) fprintf(stderr, "  %u ML and %u MAP scores differ\n", ml_diff, map_diff);
+
+    /* The batch entry points, all rows at once, give the same bits. */
+    static float out[MAXR][3];
+    size_t done = 0;
+    EXPECT(mlmap_ml_batch(t, &xs[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
+    CHECK(done == rows);
+    CHECK(memcmp(out, ml_want, rows * 3 * sizeof(float)) == 0);
+    EXPECT(mlmap_map_batch(t, &xs[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
+    CHECK(memcmp(out, map_want, rows * 3 * sizeof(float)) == 0);
+    EXPECT(mlmap_bayes_batch(t, &xs[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
+    unsigned bayes_diff = 0;
+    for (size_t r = 0; r < rows; r++) {
+        float b[3];
+        mlmap_bayes(t, xs[r], 3, oss[r], b, 3);
+        for (int i = 0; i < 3; i++) bayes_diff += !same_bits(b[i], out[r][i]);
+    }
+    CHECK(bayes_diff == 0);
+
+    /* A copy of the storage is the same table. */
+    static mlmap_table_t copy;
+    memcpy(&copy, t, sizeof copy);
+    float a[3], b[3];
+    EXPECT(mlmap_map(&copy, xs[7], 3, oss[7], a, 3), MLMAP_OK);
+    EXPECT(mlmap_map(t, xs[7], 3, oss[7], b, 3), MLMAP_OK);
+    CHECK(memcmp(a, b, sizeof a) == 0);
+    free(in);
+    free(ap);
+}
+
+int main(int argc, char **argv) {
+    if (argc != 5) {
+        fprintf(stderr, "usage: %s TABLE SMALL_TABLE INPUT_CSV APPLY_CSV\n", argv[0]);
+        return 2;
+    }
+    size_t len, small_len;
+    uint8_t *bytes = read_file(argv[1], &len);
+    uint8_t *small = read_file(argv[2], &small_len);
+
+    test_limits_and_status_strings();
+    test_no_table(&table);
+    test_decode_arguments(bytes, len);
+    test_decode_errors(bytes, len);
+    test_every_corruption(bytes, len);
+
+    EXPECT(mlmap_table_decode(&table, sizeof table, bytes, len), MLMAP_OK);
+    test_table_info(&table);
+    test_head_arguments(&table, mlmap_ml, mlmap_ml_batch, "ML");
+    test_head_arguments(&table, mlmap_map, mlmap_map_batch, "MAP");
+    test_head_arguments(&table, mlmap_bayes, mlmap_bayes_batch, "Bayes");
+    test_decide();
+    test_against_apply(&table, argv[3], argv[4]);
+
+    /* A version-1 table has no Bayes head. */
+    EXPECT(mlmap_table_decode(&small_t, sizeof small_t, small, small_len), MLMAP_OK);
+    mlmap_shape_t shape;
+    mlmap_settings_t settings;
+    EXPECT(mlmap_shape(&small_t, &shape), MLMAP_OK);
+    CHECK(shape.classes == 3 && shape.bins_ml == 4 && shape.bins_map == 2);
+    CHECK(shape.bins_bayes == 0 && shape.categories == 0);
+    EXPECT(mlmap_settings(&small_t, &settings), MLMAP_OK);
+    CHECK(settings.lambda_bayes == 0.0f);
+    float x[3] = {0.5f, 1.0f, -1.0f}, out[3];
+    EXPECT(mlmap_bayes(&small_t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_BAYES_HEAD);
+    EXPECT(mlmap_bayes_batch(&small_t, x, 1, 3, NULL, out, 3, NULL), MLMAP_ERR_NO_BAYES_HEAD);
+    EXPECT(mlmap_ml(&small_t, x, 3, 1.0f, out, 3), MLMAP_OK);
+
+    free(bytes);
+    free(small);
+    printf("%u passed, %u failed\n", passed, failed);
+    return failed ? 1 : 0;
+}

@@ -1,0 +1,101 @@
+//! The C entry points give the Rust layer's scores bit for bit (the fixed-size
+//! `Table` of the shipped table's shape), for every head, per detection and in batches.
+//! Run with `cargo test --features std` (the library's own panic handler is for
+//! `no_std` builds).
+
+use mlmap::Table;
+use mlmap_ffi::*;
+
+const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
+
+#[repr(C, align(8))]
+struct Storage([u8; 128 * 1024]);
+
+fn detections() -> Vec<([f32; 3], f32)> {
+    let mut v = Vec::new();
+    let mut s = 0x2545_f491_4f6c_dd1du64;
+    for i in 0..5000 {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        let x = |t: u64| ((t % 6000) as f32 - 3000.0) / 300.0;
+        v.push(([x(s), x(s >> 20), x(s >> 40)], (i % 21) as f32 / 20.0));
+    }
+    v.push(([f32::INFINITY, f32::NEG_INFINITY, 0.0], 1.0));
+    v
+}
+
+#[test]
+fn c_api_scores_equal_the_rust_layer_bit_for_bit() {
+    let rust = Table::<3, 22, 17, 22, 4>::from_bytes(SHIPPED).unwrap();
+    let mut storage = Box::new(Storage([0; 128 * 1024]));
+    let t = storage.0.as_mut_ptr().cast::<mlmap_table_t>();
+    let size = storage.0.len();
+    // SAFETY: `size` bytes of 8-aligned storage, and the table's bytes.
+    let status = unsafe { mlmap_table_decode(t, size, SHIPPED.as_ptr(), SHIPPED.len()) };
+    assert_eq!(status, mlmap_status_t::MLMAP_OK);
+    let dets = detections();
+    let bits = |s: &[f32]| s.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    type One = unsafe extern "C" fn(
+        *const mlmap_table_t,
+        *const f32,
+        usize,
+        f32,
+        *mut f32,
+        usize,
+    ) -> mlmap_status_t;
+    for (x, os) in &dets {
+        let want = [
+            rust.ml(x, *os).unwrap().0,
+            rust.map(x, *os).unwrap().0,
+            rust.bayes(x, *os).unwrap().0,
+        ];
+        for (h, f) in [mlmap_ml as One, mlmap_map, mlmap_bayes].iter().enumerate() {
+            let mut out = [0.0f32; 3];
+            // SAFETY: 3 logits, 3 outputs, a decoded table.
+            let s = unsafe { f(t, x.as_ptr(), 3, *os, out.as_mut_ptr(), 3) };
+            assert_eq!(s, mlmap_status_t::MLMAP_OK);
+            assert_eq!(bits(&out), bits(&want[h]), "head {h}, {x:?}, {os}");
+        }
+    }
+    // Batches.
+    let xs: Vec<f32> = dets.iter().flat_map(|(x, _)| *x).collect();
+    let os: Vec<f32> = dets.iter().map(|(_, o)| *o).collect();
+    let mut out = vec![0.0f32; xs.len()];
+    let mut done = 0usize;
+    // SAFETY: rows * 3 floats in and out, rows objectness values.
+    let s = unsafe {
+        mlmap_bayes_batch(
+            t,
+            xs.as_ptr(),
+            dets.len(),
+            3,
+            os.as_ptr(),
+            out.as_mut_ptr(),
+            out.len(),
+            &mut done,
+        )
+    };
+    assert_eq!((s, done), (mlmap_status_t::MLMAP_OK, dets.len()));
+    let rows: Vec<[f32; 3]> = dets.iter().map(|(x, _)| *x).collect();
+    let mut want = vec![[0.0f32; 3]; rows.len()];
+    rust.bayes_batch(&rows, Some(&os), &mut want).unwrap();
+    assert_eq!(bits(&out), bits(want.as_flattened()));
+}
+
+#[test]
+fn every_status_has_a_distinct_description() {
+    let unknown = unsafe { std::ffi::CStr::from_ptr(mlmap_status_str(-1)) };
+    let mut seen = std::collections::HashSet::new();
+    for (i, s) in ALL_STATUSES.iter().enumerate() {
+        assert_eq!(*s as i32, i as i32);
+        // SAFETY: a static NUL-terminated string.
+        let d = unsafe { std::ffi::CStr::from_ptr(mlmap_status_str(*s as i32)) };
+        assert!(
+            !d.is_empty() && d != unknown && seen.insert(d.to_owned()),
+            "{s:?}"
+        );
+    }
+    let next = unsafe { std::ffi::CStr::from_ptr(mlmap_status_str(ALL_STATUSES.len() as i32)) };
+    assert_eq!(next, unknown);
+}

@@ -1,0 +1,155 @@
+//! The C API (`ffi/`) with arbitrary bytes and lengths: decoding any bytes into storage
+//! of any size returns a status (OK exactly when the host decoder accepts the table and
+//! its shape fits the library's maximum); every entry point, given a decoded table or
+//! not, NULL or real buffers of any length, logits and objectness of any value, returns
+//! a known status; on OK the scores are in `[0, OS]` and equal the batch entry point's.
+#![no_main]
+
+use arbitrary::{Arbitrary, Unstructured};
+use libfuzzer_sys::fuzz_target;
+use mlmap::host::DynTable;
+use mlmap_ffi::mlmap_status_t::*;
+use mlmap_ffi::*;
+use mlmap_fuzz::with_valid_crc;
+
+#[repr(C, align(8))]
+struct Storage([u8; 96 * 1024]);
+
+#[derive(Arbitrary, Debug)]
+struct Call {
+    head: u8,
+    null_table: bool,
+    null_logits: bool,
+    null_out: bool,
+    null_objectness: bool,
+    n_logits: u8,
+    out_len: u8,
+    rows: u8,
+    objectness: f32,
+    logits: Vec<f32>,
+}
+
+fn known(s: mlmap_status_t) -> bool {
+    ALL_STATUSES.contains(&s)
+}
+
+fuzz_target!(|data: &[u8]| {
+    let mut u = Unstructured::new(data);
+    let split: u16 = u.arbitrary().unwrap_or(0);
+    let size_cut: u32 = u.arbitrary().unwrap_or(0);
+    let fix_crc: bool = u.arbitrary().unwrap_or(false);
+    let rest = u.take_rest();
+    let n = (usize::from(split)).min(rest.len());
+    let (table_bytes, calls) = rest.split_at(n);
+    let fixed;
+    let table_bytes = if fix_crc {
+        fixed = with_valid_crc(table_bytes).unwrap_or_default();
+        &fixed[..]
+    } else {
+        table_bytes
+    };
+
+    let mut storage = Box::new(Storage([0xa5; 96 * 1024]));
+    let t = storage.0.as_mut_ptr().cast::<mlmap_table_t>();
+    let mut limits = mlmap_limits_t::default();
+    // SAFETY: a valid pointer.
+    assert_eq!(unsafe { mlmap_limits(&mut limits) }, MLMAP_OK);
+    // Any storage size up to the real one.
+    let size = (size_cut as usize) % (storage.0.len() + 1);
+    // SAFETY: `size <= storage.0.len()` bytes of 8-aligned storage; the table's bytes.
+    let s = unsafe { mlmap_table_decode(t, size, table_bytes.as_ptr(), table_bytes.len()) };
+    assert!(known(s), "{s:?}");
+    if size < limits.table_size {
+        assert_eq!(s, MLMAP_ERR_STORAGE_TOO_SMALL);
+    } else {
+        let host = DynTable::from_bytes(table_bytes);
+        let fits = host.as_ref().is_ok_and(|d| {
+            d.k() <= limits.max_classes
+                && d.bins_ml() <= limits.max_bins
+                && d.bins_map() <= limits.max_bins
+                && d.bayes().is_none_or(|b| b.bins() <= limits.max_bins_bayes)
+        });
+        assert_eq!(s == MLMAP_OK, fits, "{s:?} vs {:?}", host.as_ref().err());
+    }
+    let mut k = 0usize;
+    // SAFETY: valid pointers; the storage holds a table or not (tag).
+    let ks = unsafe { mlmap_class_count(t, &mut k) };
+    assert_eq!(ks == MLMAP_OK, s == MLMAP_OK);
+
+    let mut u = Unstructured::new(calls);
+    for _ in 0..8 {
+        let Ok(c) = Call::arbitrary(&mut u) else { break };
+        let n_logits = usize::from(c.n_logits) % 20;
+        let rows = usize::from(c.rows) % 8;
+        let mut logits = c.logits.clone();
+        logits.resize(n_logits * rows.max(1), 0.5);
+        let out_len = usize::from(c.out_len) % 64;
+        let mut out = vec![-7.0f32; out_len.max(1)];
+        let os = vec![c.objectness; rows.max(1)];
+        let table = if c.null_table { core::ptr::null() } else { t.cast_const() };
+        let lp = if c.null_logits { core::ptr::null() } else { logits.as_ptr() };
+        let op = if c.null_out { core::ptr::null_mut() } else { out.as_mut_ptr() };
+        let osp = if c.null_objectness { core::ptr::null() } else { os.as_ptr() };
+        let mut done = usize::MAX;
+        // SAFETY: every non-NULL pointer has the length passed with it.
+        let (one, batch) = unsafe {
+            match c.head % 3 {
+                0 => (
+                    mlmap_ml(table, lp, n_logits, c.objectness, op, out_len),
+                    mlmap_ml_batch(table, lp, rows, n_logits, osp, op, out_len, &mut done),
+                ),
+                1 => (
+                    mlmap_map(table, lp, n_logits, c.objectness, op, out_len),
+                    mlmap_map_batch(table, lp, rows, n_logits, osp, op, out_len, &mut done),
+                ),
+                _ => (
+                    mlmap_bayes(table, lp, n_logits, c.objectness, op, out_len),
+                    mlmap_bayes_batch(table, lp, rows, n_logits, osp, op, out_len, &mut done),
+                ),
+            }
+        };
+        assert!(known(one) && known(batch), "{one:?} {batch:?}");
+        if one == MLMAP_OK {
+            assert_eq!(n_logits, k);
+            // The batch wrote its rows over `out`: score row 0 again to check it.
+            let mut again = vec![0.0f32; k];
+            // SAFETY: k logits, k outputs.
+            let r = unsafe {
+                match c.head % 3 {
+                    0 => mlmap_ml(table, lp, k, c.objectness, again.as_mut_ptr(), k),
+                    1 => mlmap_map(table, lp, k, c.objectness, again.as_mut_ptr(), k),
+                    _ => mlmap_bayes(table, lp, k, c.objectness, again.as_mut_ptr(), k),
+                }
+            };
+            assert_eq!(r, MLMAP_OK);
+            let os = c.objectness;
+            for v in &again {
+                assert!(*v >= 0.0 && *v <= os, "score {v} outside [0, {os}]");
+            }
+            if batch == MLMAP_OK && rows > 0 && !c.null_objectness {
+                for (a, b) in again.iter().zip(&out) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "batch row 0 differs");
+                }
+            }
+        }
+        if batch == MLMAP_OK {
+            assert_eq!(done, rows);
+        }
+        let mut name = [0 as core::ffi::c_char; 40];
+        let len = usize::from(c.out_len) % 40;
+        // SAFETY: `len <= 40` writable bytes.
+        let s = unsafe { mlmap_class_name(table, usize::from(c.rows), name.as_mut_ptr(), len) };
+        assert!(known(s));
+        let mut idx = 0usize;
+        let bytes: Vec<u8> = c.logits.iter().map(|f| f.to_bits() as u8).collect();
+        // SAFETY: `bytes.len()` readable bytes.
+        let s = unsafe { mlmap_class_index(table, bytes.as_ptr().cast(), bytes.len(), &mut idx) };
+        assert!(known(s));
+        if n_logits > 0 && logits.len() >= n_logits {
+            // SAFETY: n_logits floats each.
+            let s = unsafe { mlmap_decide(logits.as_ptr(), logits.as_ptr(), n_logits, &mut idx) };
+            assert_eq!(s, MLMAP_OK);
+            assert!(idx < n_logits);
+        }
+    }
+});

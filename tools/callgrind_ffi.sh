@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Instructions per detection of the C API against the Rust call, counted by valgrind's
+# callgrind: ffi/tests/instr_count.c (mlmap_ml, mlmap_map, mlmap_bayes through a function
+# pointer, on the x86-64 static library) and examples/instr_count.rs (Table::ml,
+# Table::map), same table, same 4096 rows of examples/data/test.csv. Each runs N and 2N
+# detections; (I(2N) - I(N)) / N removes start-up and reading the rows.
+#
+#   tools/callgrind_ffi.sh          # N = 16384
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+n="${N:-16384}"
+out="$(mktemp -d)"
+trap 'rm -rf "$out"' EXIT
+(cd ffi && cargo rustc --quiet --release --crate-type staticlib)
+cc -std=c11 -O2 -Iinclude ffi/tests/instr_count.c -Wl,--gc-sections \
+    ffi/target/release/libmlmap_ffi.a -lm -o "$out/c_count"
+cargo build --quiet --release --features micromath --example instr_count
+rust="target/release/examples/instr_count"
+(cd ffi && cargo build --quiet --release --features std --example bounded_count)
+bounded="ffi/target/release/examples/bounded_count"
+
+count() { # command...
+    valgrind --tool=callgrind --callgrind-out-file="$out/cg" "$@" >/dev/null 2>&1
+    awk '/^totals:/ { print $2 }' "$out/cg"
+}
+per() { # command prefix (kind and N are appended)
+    local a b
+    a="$(count "$@" "$n")"
+    b="$(count "$@" "$((2 * n))")"
+    python3 -c "print(f'{($b - $a) / $n:.1f}')"
+}
+
+declare -A c r b
+for kind in noop ml map bayes; do
+    c[$kind]="$(per "$out/c_count" tables/default.mlmap examples/data/test.csv "$kind")"
+    b[$kind]="$(per "$bounded" "$kind")"
+done
+for kind in noop ml map; do
+    r[$kind]="$(per "$rust" "$kind")"
+done
+r[bayes]=nan
+echo "Instructions per detection (N = $n); Table = Table<3, 22, 17, 22, 4> (shape fixed at"
+echo "compile time), BoundedTable = the C API's run-time shaped table, from Rust"
+printf '%-6s %10s %10s %13s %10s %14s\n' kind "C API" "Table" "BoundedTable" "C / Table" "C / Bounded"
+for kind in noop ml map bayes; do
+    python3 -c "print('%-6s %10.1f %10s %13.1f %10s %14.3f' % ('$kind', ${c[$kind]}, '${r[$kind]}', ${b[$kind]}, '-' if '${r[$kind]}' == 'nan' else '%.3f' % (${c[$kind]} / float('${r[$kind]}')), ${c[$kind]} / ${b[$kind]}))"
+done
