@@ -508,7 +508,8 @@ mod tests {
             assert_eq!(bits(&out), bits(&fixed.ml(&x, os).unwrap().0), "ML {x:?}");
             v.map_into::<Libm>(&x, os, &mut out, &mut scratch).unwrap();
             assert_eq!(bits(&out), bits(&fixed.map(&x, os).unwrap().0), "MAP {x:?}");
-            v.bayes_into::<crate::FastMath>(&x, os, &mut out, &mut cats).unwrap();
+            v.bayes_into::<crate::FastMath>(&x, os, &mut out, &mut cats)
+                .unwrap();
             assert_eq!(
                 bits(&out),
                 bits(&fixed.bayes(&x, os).unwrap().0),
