@@ -1,11 +1,13 @@
 //! Running sums: compensated summation, and the [`Accumulator`] of the metrics that
 //! can be computed in one pass without storing scores (`ece`, `mce`, `nll`, `brier`,
-//! `accuracy`).
+//! `accuracy`), and optionally the average precision of each class (which keeps one
+//! sort key per row and class).
 
 use std::vec::Vec;
 
 use super::binning::{calibration, BinSum, CalibrationBin, Edges};
 use super::outcome::{outcome, Outcome};
+use super::ranking::{average_precision, pr_key, pr_points_of_keys};
 use super::{MetricsConfig, MetricsError, NLL_FLOOR};
 
 /// Neumaier's compensated sum: the error does not grow with the number of terms.
@@ -58,6 +60,8 @@ pub struct Parts {
     pub nll: bool,
     /// `brier`: a square per score.
     pub brier: bool,
+    /// `ap_<class>` and their mean: a sort key per row and class, sorted at the end.
+    pub ranking: bool,
 }
 
 impl Parts {
@@ -66,6 +70,7 @@ impl Parts {
         calibration: true,
         nll: true,
         brier: true,
+        ranking: true,
     };
 }
 
@@ -96,6 +101,8 @@ pub struct Accumulator {
     bins: Option<Vec<BinSum>>,
     nll: Option<(Sum, usize)>,
     brier: Option<Sum>,
+    /// Per class, the precision-recall sort key of every row (with `ranking`).
+    ranking: Option<Vec<Vec<u64>>>,
     rows: usize,
     labelled: usize,
     correct: usize,
@@ -120,6 +127,7 @@ impl Accumulator {
             bins,
             nll: parts.nll.then(|| (Sum::default(), 0)),
             brier: parts.brier.then(Sum::default),
+            ranking: parts.ranking.then(Vec::new),
             rows: 0,
             labelled: 0,
             correct: 0,
@@ -159,6 +167,14 @@ impl Accumulator {
                 let s: f64 = scores.get(l).map_or(0.0, |&s| s.into());
                 sum.add(-s.max(NLL_FLOOR).ln());
                 *n += 1;
+            }
+        }
+        if let Some(keys) = &mut self.ranking {
+            if keys.len() < scores.len() {
+                keys.resize_with(scores.len(), Vec::new);
+            }
+            for (i, (class_keys, &s)) in keys.iter_mut().zip(scores).enumerate() {
+                class_keys.push(pr_key(s.into(), label == Some(i)));
             }
         }
         if let Some(sum) = &mut self.brier {
@@ -204,6 +220,23 @@ impl Accumulator {
         self.nll
             .filter(|&(_, n)| n > 0)
             .map(|(sum, n)| sum.value() / n as f64)
+    }
+
+    /// `ap_<class>` of every class seen, as [`average_precision`] of the metrics core
+    /// (`None` for a class without positives); `None` unless ranking is kept.
+    pub fn average_precisions(&self) -> Option<Vec<Option<f64>>> {
+        let keys = self.ranking.as_ref()?;
+        Some(
+            keys.iter()
+                .map(|k| average_precision(&pr_points_of_keys(k.clone())))
+                .collect(),
+        )
+    }
+
+    /// `mAP`, the mean of the defined `ap_<class>` ([`Metrics::mean_ap`](super::Metrics::mean_ap));
+    /// `None` unless ranking is kept or when no class has a positive row.
+    pub fn mean_ap(&self) -> Option<f64> {
+        super::mean_of_defined(&self.average_precisions()?)
     }
 
     /// `brier`, the mean over rows of `sum_i (s_i - y_i)^2` (0 without rows); `None`
