@@ -24,7 +24,10 @@ fn apply_writes_the_design_columns_and_the_layer_scores() {
     }
     let table = read_table(Path::new(&bayes_table()));
     let header = columns(&[], &table);
-    assert_eq!(header[6..9], ["bayes_car", "bayes_cyclist", "bayes_pedestrian"]);
+    assert_eq!(
+        header[6..9],
+        ["bayes_car", "bayes_cyclist", "bayes_pedestrian"]
+    );
     assert_eq!(header[9..], ["ml_pred", "map_pred", "bayes_pred"]);
 }
 
@@ -36,13 +39,7 @@ fn apply_writes_the_design_columns(table_path: &str) {
     ok(
         d,
         &[
-            "apply",
-            "--table",
-            table_path,
-            "--input",
-            &input,
-            "--output",
-            "out.csv",
+            "apply", "--table", table_path, "--input", &input, "--output", "out.csv",
         ],
     );
     let (header, records) = read_csv(&d.join("out.csv"));

@@ -15,7 +15,10 @@ fn check_order(name: &str, cands: &[Value], objective: &str) {
         .iter()
         .map(|c| c["within_guards"].as_bool().unwrap())
         .collect();
-    assert!(within.windows(2).all(|w| w[0] >= w[1]), "{name}: {within:?}");
+    assert!(
+        within.windows(2).all(|w| w[0] >= w[1]),
+        "{name}: {within:?}"
+    );
     let values: Vec<f64> = cands
         .iter()
         .filter(|c| c["within_guards"] == true)
@@ -221,7 +224,10 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
         assert_eq!(chosen["bins"].as_u64().unwrap() as usize, (head.bins)(&t));
         assert_eq!(chosen["lambda"].as_f64().unwrap() as f32, (head.lambda)(&t));
         for key in ["ece", "accuracy", "mean_ap"] {
-            let (a, b) = (chosen[key].as_f64().unwrap(), cands[0][key].as_f64().unwrap());
+            let (a, b) = (
+                chosen[key].as_f64().unwrap(),
+                cands[0][key].as_f64().unwrap(),
+            );
             assert!((a - b).abs() <= 1e-12, "{name} {key}: {a} vs {b}");
         }
         assert!(chosen["ood_mean"].as_f64().unwrap() > 0.0);
@@ -249,16 +255,24 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
         .find(|l| l.starts_with("metric "))
         .unwrap();
     let cols: Vec<&str> = header.split_whitespace().collect();
-    assert_eq!(cols, ["metric", "softmax", "temperature", "ml", "map", "bayes"]);
-    for key in ["ece", "nll", "brier", "accuracy", "mAP", "auroc", "ood_mean"] {
+    assert_eq!(
+        cols,
+        ["metric", "softmax", "temperature", "ml", "map", "bayes"]
+    );
+    for key in [
+        "ece", "nll", "brier", "accuracy", "mAP", "auroc", "ood_mean",
+    ] {
         assert!(
-            run.stdout.lines().any(|l| l.split_whitespace().next() == Some(key)),
+            run.stdout
+                .lines()
+                .any(|l| l.split_whitespace().next() == Some(key)),
             "{key}:\n{}",
             run.stdout
         );
     }
     assert!(
-        run.stdout.contains("best head by ece within the accuracy and mAP guards: ")
+        run.stdout
+            .contains("best head by ece within the accuracy and mAP guards: ")
             || run
                 .stdout
                 .contains("no head is within the accuracy and mAP guards"),
@@ -280,7 +294,9 @@ fn tune_without_the_bayes_head_and_bad_guards() {
     assert!(read_table(&d.join("t.mlmap")).bayes().is_none());
     assert!(v.get("bayes").is_none());
     assert!(v["validation"]["methods"].get("bayes").is_none());
-    assert!(v["validation"]["methods"]["softmax"].get("ood_mean").is_none());
+    assert!(v["validation"]["methods"]["softmax"]
+        .get("ood_mean")
+        .is_none());
 
     for (flag, value) in [
         ("--max-accuracy-loss", "-0.1"),

@@ -270,12 +270,15 @@ pub fn comparison(c: &Comparison, objective: Objective) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "validation metrics at the chosen settings: {} rows{}; temperature T = {:.4}",
+        "validation metrics at the chosen settings: {} rows{}; {}",
         c.rows,
         c.ood_rows.map_or(String::new(), |n| format!(
             " ({n} never-seen, as background)"
         )),
-        c.temperature
+        c.temperature.map_or_else(
+            || "no temperature (no row labelled with a class)".into(),
+            |t| format!("temperature T = {t:.4}")
+        )
     );
     let _ = write!(s, "{:<9}", "metric");
     for m in &c.methods {

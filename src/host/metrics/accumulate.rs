@@ -245,3 +245,37 @@ impl Accumulator {
         self.brier.map(|sum| sum.value() / self.rows.max(1) as f64)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn average_precision_by_hand() {
+        // Class 0: positives at scores 0.8 and 0.35, negatives at 0.4 and 0.1:
+        // precision 1 at recall 1/2, then 2/3 at recall 1: AP = 1/2 + 1/3.
+        // Class 1: its only positive ranks first: AP = 1.
+        let rows: [([f64; 2], Option<usize>); 4] = [
+            ([0.8, 0.1], Some(0)),
+            ([0.4, 0.3], None),
+            ([0.35, 0.6], Some(0)),
+            ([0.1, 0.9], Some(1)),
+        ];
+        let mut acc = Accumulator::new(&MetricsConfig::default(), Parts::ALL).unwrap();
+        for (s, l) in &rows {
+            acc.add(s, &[] as &[f64], *l);
+        }
+        let ap = acc.average_precisions().unwrap();
+        assert!((ap[0].unwrap() - (0.5 + 1.0 / 3.0)).abs() < 1e-12, "{ap:?}");
+        assert_eq!(ap[1], Some(1.0));
+        let want = (0.5 + 1.0 / 3.0 + 1.0) / 2.0;
+        assert!((acc.mean_ap().unwrap() - want).abs() < 1e-12);
+        // Without the ranking part there is no mAP.
+        let parts = Parts {
+            ranking: false,
+            ..Parts::ALL
+        };
+        let acc = Accumulator::new(&MetricsConfig::default(), parts).unwrap();
+        assert_eq!(acc.mean_ap(), None);
+    }
+}

@@ -657,6 +657,40 @@ mod tests {
     use super::*;
 
     #[test]
+    fn guards_order_candidates() {
+        let g = Guards::default();
+        let r = Reference {
+            accuracy: Some(0.9),
+            mean_ap: None,
+        };
+        // No reference mAP: no guard on it; an undefined accuracy loses everything.
+        assert_eq!(g.excess(Some(0.895), None, &r), 0.0);
+        assert_eq!(g.excess(None, Some(0.5), &r), f64::INFINITY);
+        assert!((g.excess(Some(0.85), None, &r) - 0.045).abs() < 1e-12);
+        assert!(Guards {
+            max_accuracy_loss: -1.0,
+            ..g
+        }
+        .validate()
+        .is_err());
+        let c = |excess: f64, objective: f64| Candidate {
+            bins: 4,
+            lambda: 1.0,
+            objective,
+            excess,
+            ece: None,
+            nll: None,
+            brier: None,
+            accuracy: None,
+            mean_ap: None,
+        };
+        let mut v = [c(0.01, 0.1), c(0.0, 0.3), c(0.002, 0.5), c(0.0, 0.2)];
+        v.sort_by(order);
+        let got: Vec<(f64, f64)> = v.iter().map(|c| (c.excess, c.objective)).collect();
+        assert_eq!(got, [(0.0, 0.2), (0.0, 0.3), (0.002, 0.5), (0.01, 0.1)]);
+    }
+
+    #[test]
     fn bin_sets() {
         assert_eq!(parse_bins("22").unwrap(), [22]);
         assert_eq!(parse_bins("4..7").unwrap(), [4, 5, 6, 7]);

@@ -98,8 +98,9 @@ pub struct Comparison {
     pub rows: usize,
     /// Never-seen rows among them.
     pub ood_rows: Option<usize>,
-    /// The temperature fitted on the validation rows.
-    pub temperature: f64,
+    /// The temperature fitted on the validation rows; `None` when it cannot be (no
+    /// row labelled with a class), and temperature scaling is then left out.
+    pub temperature: Option<f64>,
     /// Softmax's accuracy and mAP, which the guards compare against.
     pub reference: Reference,
     /// The methods: softmax, temperature, then every head in the table.
@@ -335,14 +336,14 @@ fn compare(
     let fit_rows = Rows::new(&val.logits, k, val_labels, &val.objectness)
         .map_err(|e| HostError::input(val_path, e))?;
     let t = baselines::fit_temperature_detailed(&fit_rows)
-        .map_err(|e| HostError::input(val_path, e))?
-        .t;
+        .ok()
+        .map(|f| f.t);
     let with_ood = ood.is_some();
-    let temperature = score_baseline(Baseline::Temperature(t), rows, k).map_err(&fail)?;
-    let mut methods = vec![
-        (Method::Softmax, softmax, Some(softmax_m)),
-        (Method::Temperature, temperature, None),
-    ];
+    let mut methods = vec![(Method::Softmax, softmax, Some(softmax_m))];
+    if let Some(t) = t {
+        let temperature = score_baseline(Baseline::Temperature(t), rows, k).map_err(&fail)?;
+        methods.push((Method::Temperature, temperature, None));
+    }
     for method in [Method::Ml, Method::Map, Method::Bayes] {
         let Some(head) = method.head() else { continue };
         if head == Head::Bayes && table.bayes().is_none() {
