@@ -14,6 +14,7 @@ use super::data::{at, check_classes, Loaded};
 use super::error::HostError;
 use super::metrics::{self, Metrics, MetricsConfig};
 use super::names::{Name, Named};
+use super::tune::{Guards, Objective, Reference};
 use super::DynTable;
 use crate::{FastMath, Head, Libm};
 
@@ -30,6 +31,8 @@ pub enum Method {
     Ml,
     /// The layer's MAP head.
     Map,
+    /// The layer's Bayes head (DESIGN §1.6), when the table has one.
+    Bayes,
 }
 
 impl Named for Method {
@@ -52,17 +55,19 @@ impl Named for Method {
         ),
         Name::new(Self::Ml, "ml", "The layer's ML head"),
         Name::new(Self::Map, "map", "The layer's MAP head"),
+        Name::new(Self::Bayes, "bayes", "The layer's Bayes head"),
     ];
 }
 
 impl Method {
     /// Every method, in report order.
-    pub const ALL: [Self; 5] = [
+    pub const ALL: [Self; 6] = [
         Self::Sigmoid,
         Self::Softmax,
         Self::Temperature,
         Self::Ml,
         Self::Map,
+        Self::Bayes,
     ];
 
     /// The layer head behind the method, if it is one.
@@ -71,10 +76,12 @@ impl Method {
             Self::Sigmoid | Self::Softmax | Self::Temperature => None,
             Self::Ml => Some(Head::Ml),
             Self::Map => Some(Head::Map),
+            Self::Bayes => Some(Head::Bayes),
         }
     }
 
-    /// The name in prose: the baselines' names, the heads' titles (`ML`, `MAP`).
+    /// The name in prose: the baselines' names, the heads' titles (`ML`, `MAP`,
+    /// `Bayes`).
     pub fn title(self) -> String {
         self.head()
             .map_or_else(|| self.name().to_string(), |h| h.to_string())
@@ -131,7 +138,7 @@ fn baseline(b: Baseline, d: &Loaded, k: usize, path: &Path) -> Result<Vec<f64>, 
 }
 
 /// The scores of `method` on `data`; `None` for the temperature baseline without a
-/// fitted temperature.
+/// fitted temperature and for the Bayes head of a table without one.
 fn method_scores(
     method: Method,
     table: &DynTable,
@@ -149,6 +156,8 @@ fn method_scores(
         },
         Method::Ml => return head_scores(table, Head::Ml, data, path).map(Some),
         Method::Map => return head_scores(table, Head::Map, data, path).map(Some),
+        Method::Bayes if table.bayes().is_none() => return Ok(None),
+        Method::Bayes => return head_scores(table, Head::Bayes, data, path).map(Some),
     };
     baseline(b, data, k, path).map(Some)
 }
@@ -200,8 +209,10 @@ pub struct Evaluation {
     pub labels: Vec<Option<usize>>,
     /// The test logits (`N x K`), which decide ties (DESIGN §1.7).
     pub logits: Vec<f64>,
+    /// The out-of-distribution logits, with such a set.
+    pub ood_logits: Option<Vec<f64>>,
     /// Every method evaluated, in [`Method::ALL`] order (temperature only with a
-    /// validation set).
+    /// validation set, Bayes only when the table has that head).
     pub methods: Vec<MethodResult>,
     /// The fitted temperature, with a validation set.
     pub temperature: Option<Temperature>,
@@ -227,6 +238,62 @@ impl Evaluation {
             entries.push(("T".into(), Some(t.t)));
         }
         entries
+    }
+
+    /// Every metric of `r` on the test rows and the out-of-distribution rows together,
+    /// the latter as background (label none), so that confident scores on never-seen
+    /// objects count against calibration and ranking; the test rows alone without
+    /// such a set.
+    ///
+    /// # Errors
+    ///
+    /// [`HostError::Input`] when the scores do not describe the rows.
+    pub fn with_unseen(&self, r: &MethodResult) -> Result<Metrics, HostError> {
+        let k = self.class_names.len();
+        let (mut scores, mut logits, mut labels) =
+            (r.test.clone(), self.logits.clone(), self.labels.clone());
+        if let (Some(o), Some(x)) = (&r.ood, &self.ood_logits) {
+            scores.extend_from_slice(o);
+            logits.extend_from_slice(x);
+            labels.extend(std::iter::repeat_n(None, o.len() / k.max(1)));
+        }
+        metrics::evaluate_with_logits(&scores, &logits, k, &labels, &self.config)
+            .map_err(|e| HostError::Input(std::format!("{}: {e}", r.method)))
+    }
+
+    /// The head to ship: among the heads whose accuracy and mAP on test + unseen
+    /// ([`with_unseen`](Self::with_unseen)) lose no more than `guards` allow against
+    /// softmax's, the one with the best `objective` there; `None` when no head is
+    /// within the guards.
+    ///
+    /// # Errors
+    ///
+    /// As [`with_unseen`](Self::with_unseen).
+    pub fn best_head(
+        &self,
+        objective: Objective,
+        guards: &Guards,
+    ) -> Result<Option<(Method, Metrics)>, HostError> {
+        let Some(softmax) = self.methods.iter().find(|r| r.method == Method::Softmax) else {
+            return Ok(None);
+        };
+        let softmax = self.with_unseen(softmax)?;
+        let reference = Reference {
+            accuracy: softmax.accuracy,
+            mean_ap: softmax.mean_ap(),
+        };
+        let mut best: Option<(Method, Metrics, f64)> = None;
+        for r in self.methods.iter().filter(|r| r.method.head().is_some()) {
+            let m = self.with_unseen(r)?;
+            if guards.excess(m.accuracy, m.mean_ap(), &reference) > 0.0 {
+                continue;
+            }
+            let Some(v) = objective.of(&m) else { continue };
+            if best.as_ref().is_none_or(|b| v < b.2) {
+                best = Some((r.method, m, v));
+            }
+        }
+        Ok(best.map(|(method, m, _)| (method, m)))
     }
 
     /// The value of metric `key` of `method`; `None` when undefined or absent.
@@ -298,6 +365,7 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
         class_names: names,
         labels,
         logits: test.logits.clone(),
+        ood_logits: inp.ood.map(|(d, _)| d.logits.clone()),
         methods,
         temperature,
         rows: test.len(),
@@ -313,10 +381,17 @@ mod tests {
     #[test]
     fn methods_have_names_and_titles() {
         let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-        assert_eq!(names, ["sigmoid", "softmax", "temperature", "ml", "map"]);
+        assert_eq!(
+            names,
+            ["sigmoid", "softmax", "temperature", "ml", "map", "bayes"]
+        );
         let titles: Vec<String> = Method::ALL.iter().map(|m| m.title()).collect();
-        assert_eq!(titles, ["sigmoid", "softmax", "temperature", "ML", "MAP"]);
+        assert_eq!(
+            titles,
+            ["sigmoid", "softmax", "temperature", "ML", "MAP", "Bayes"]
+        );
         assert_eq!("map".parse(), Ok(Method::Map));
-        assert!("bayes".parse::<Method>().is_err());
+        assert_eq!("bayes".parse(), Ok(Method::Bayes));
+        assert!("softmax2".parse::<Method>().is_err());
     }
 }

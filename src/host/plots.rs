@@ -18,7 +18,7 @@
 //! write the plots, only to view them.
 //!
 //! A method keeps its colour in every plot (`sigmoid`, `softmax`, `temperature`, `ml`,
-//! `map`, and a fixed fallback for any other name), and so does a class (by index).
+//! `map`, `bayes`, and a fixed fallback for any other name), and so does a class (by index).
 
 mod draw;
 mod stats;

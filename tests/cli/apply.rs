@@ -8,34 +8,42 @@ fn apply(dir: &Path, table: &str, input: &str, output: &str) -> (Vec<String>, Ve
     read_csv(&dir.join(output))
 }
 
-/// `prefix` (the carried-through columns), then [`score_columns`].
-fn columns(prefix: &[&str]) -> Vec<String> {
+/// `prefix` (the carried-through columns), then [`score_columns`] of `table`.
+fn columns(prefix: &[&str], table: &DynTable) -> Vec<String> {
     let mut want: Vec<String> = prefix.iter().map(|c| c.to_string()).collect();
-    want.extend(score_columns());
+    want.extend(score_columns(table));
     want
 }
 
 #[test]
 fn apply_writes_the_design_columns_and_the_layer_scores() {
+    // Version 1 (ML and MAP) and version 2 (with the Bayes head, its columns after
+    // the MAP ones).
+    for table_path in [golden_table(), bayes_table()] {
+        apply_writes_the_design_columns(&table_path);
+    }
+    let table = read_table(Path::new(&bayes_table()));
+    let header = columns(&[], &table);
+    assert_eq!(
+        header[6..9],
+        ["bayes_car", "bayes_cyclist", "bayes_pedestrian"]
+    );
+    assert_eq!(header[9..], ["ml_pred", "map_pred", "bayes_pred"]);
+}
+
+fn apply_writes_the_design_columns(table_path: &str) {
     let dir = tempdir();
     let d = dir.path();
-    let table_path = golden_table();
-    let table = read_table(Path::new(&table_path));
+    let table = read_table(Path::new(table_path));
     let input = data("val");
     ok(
         d,
         &[
-            "apply",
-            "--table",
-            &table_path,
-            "--input",
-            &input,
-            "--output",
-            "out.csv",
+            "apply", "--table", table_path, "--input", &input, "--output", "out.csv",
         ],
     );
     let (header, records) = read_csv(&d.join("out.csv"));
-    assert_eq!(header, columns(&["id", "label"]));
+    assert_eq!(header, columns(&["id", "label"], &table));
     let rows = rows_of(Path::new(&input));
     check_scores(&table, &rows, &header, &records);
     // id and label are carried through as written.
@@ -50,7 +58,7 @@ fn apply_writes_the_design_columns_and_the_layer_scores() {
 fn apply_omits_id_and_label_when_the_input_has_none() {
     let dir = tempdir();
     let d = dir.path();
-    let table_path = golden_table();
+    let table_path = bayes_table();
     let table = read_table(Path::new(&table_path));
     write(
         d,
@@ -63,11 +71,11 @@ fn apply_omits_id_and_label_when_the_input_has_none() {
         "label,car,cyclist,pedestrian\ncar,4.1,-2.3,-1.7\n,1,2,3\nbackground,0,0,0\n",
     );
     let (header, records) = apply(d, &table_path, "plain.csv", "a.csv");
-    assert_eq!(header, score_columns());
+    assert_eq!(header, score_columns(&table));
     check_scores(&table, &rows_of(&d.join("plain.csv")), &header, &records);
 
     let (header, records) = apply(d, &table_path, "labelled.csv", "b.csv");
-    assert_eq!(header, columns(&["label"]));
+    assert_eq!(header, columns(&["label"], &table));
     let labels: Vec<&str> = records.iter().map(|r| r[0].as_str()).collect();
     assert_eq!(labels, ["car", "", "background"]);
     check_scores(&table, &rows_of(&d.join("labelled.csv")), &header, &records);
@@ -75,7 +83,7 @@ fn apply_omits_id_and_label_when_the_input_has_none() {
     // A header without rows gives a header without rows.
     write(d, "none.csv", "car,cyclist,pedestrian\n");
     let (header, records) = apply(d, &table_path, "none.csv", "c.csv");
-    assert_eq!(header, score_columns());
+    assert_eq!(header, score_columns(&table));
     assert!(records.is_empty());
 }
 
@@ -89,7 +97,7 @@ fn apply_reads_npy_directories() {
     // numpy-written, with labels and objectness.
     let npy = repo("tests/fixtures/npy_small");
     let (header, records) = apply(d, &table_path, &npy.to_string_lossy(), "a.csv");
-    assert_eq!(header, columns(&["label"]));
+    assert_eq!(header, columns(&["label"], &table));
     let labels: Vec<&str> = records.iter().map(|r| r[0].as_str()).collect();
     assert_eq!(
         labels,
@@ -107,7 +115,7 @@ fn apply_reads_npy_directories() {
     );
     write(&only, "classes.txt", "car\ncyclist\npedestrian\n");
     let (header, records) = apply(d, &table_path, "logits_only", "b.csv");
-    assert_eq!(header, score_columns());
+    assert_eq!(header, score_columns(&table));
     check_scores(&table, &rows_of(&only), &header, &records);
     // Logits outside every histogram: the "I don't know" answer, 1/3 each.
     let third: f32 = records[2][0].parse().unwrap();

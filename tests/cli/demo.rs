@@ -26,6 +26,7 @@ fn demo_runs_the_whole_job() {
         "\n3. evaluate on ",
         "\n4. no_std layer: Table<3, 22, 17, 22, 4>::from_bytes(out/tuned.mlmap) scored 10000 test rows: 0 with scores differing from the host's in any bit\n",
         "\nsummary\n",
+        "\n  head to ship: ",
     ];
     let mut at = 0;
     for step in steps {
@@ -52,11 +53,12 @@ fn demo_runs_the_whole_job() {
     );
     let tuned = read_table(&out.join("tuned.mlmap"));
     assert_eq!((tuned.bins_ml(), tuned.bins_map()), (22, 17));
+    assert_eq!(tuned.bayes().map(|b| b.bins()), Some(22));
     let v: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).unwrap()).unwrap();
-    assert_eq!(keys(&v["methods"]), sorted(&methods(true)));
+    assert_eq!(keys(&v["methods"]), sorted(&methods(true, &tuned)));
     assert!(v["methods"]["map"]["ood_over_0_9"].is_number());
     let plots = std::fs::read_dir(out.join("plots")).unwrap().count();
-    assert!(plots >= methods(true).len());
+    assert!(plots >= methods(true, &tuned).len());
     assert!(s.contains(&format!("and {plots} plots into out\n")));
 }

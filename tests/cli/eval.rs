@@ -24,21 +24,28 @@ const METRIC_KEYS: [&str; 13] = [
 
 #[test]
 fn eval_json_has_the_design_keys_and_the_layer_metrics() {
+    // Version 1 (ML and MAP), and version 2 with the Bayes head.
+    for table_path in [golden_table(), bayes_table()] {
+        eval_json_keys_and_metrics(&table_path);
+    }
+}
+
+fn eval_json_keys_and_metrics(table_path: &str) {
     let dir = tempdir();
     let d = dir.path();
-    let table_path = golden_table();
+    let table = read_table(Path::new(table_path));
     let test = data("test");
     let (val, ood) = (data("val"), data("ood"));
     let v = ok_json(
         d,
         &eval_args(
-            &table_path,
+            table_path,
             &test,
             &["--val", &val, "--ood", &ood, "--format", "json"],
         ),
     );
     let methods_json = &v["methods"];
-    assert_eq!(keys(methods_json), sorted(&methods(true)));
+    assert_eq!(keys(methods_json), sorted(&methods(true, &table)));
     let mut with_ood: Vec<&str> = METRIC_KEYS.to_vec();
     with_ood.extend(["ood_mean", "ood_over_0_9"]);
     for (name, m) in methods_json.as_object().unwrap() {
@@ -63,10 +70,9 @@ fn eval_json_has_the_design_keys_and_the_layer_metrics() {
     assert!(methods_json["temperature"]["T"].as_f64().unwrap() > 0.0);
 
     // Each head's metrics are the metrics of the layer's scores.
-    let table = read_table(Path::new(&table_path));
     let rows = rows_of(Path::new(&test));
     let labels = class_labels(&rows);
-    for head in &HEADS {
+    for head in heads_of(&table) {
         let scores = head.flat_scores(&table, &rows);
         let m = metrics::evaluate(&scores, 3, &labels, &MetricsConfig::default()).unwrap();
         let (name, got) = (head.name, &methods_json[head.name]);
@@ -79,8 +85,8 @@ fn eval_json_has_the_design_keys_and_the_layer_metrics() {
     assert_eq!(v["ood_rows"], 2000);
 
     // Without --val there is no temperature; without --ood no ood keys.
-    let v = ok_json(d, &eval_args(&table_path, &test, &["--format", "json"]));
-    assert_eq!(keys(&v["methods"]), sorted(&methods(false)));
+    let v = ok_json(d, &eval_args(table_path, &test, &["--format", "json"]));
+    assert_eq!(keys(&v["methods"]), sorted(&methods(false, &table)));
     for m in v["methods"].as_object().unwrap().values() {
         assert_eq!(keys(m), sorted(&METRIC_KEYS));
     }
@@ -90,7 +96,8 @@ fn eval_json_has_the_design_keys_and_the_layer_metrics() {
 fn eval_text_markdown_and_plots() {
     let dir = tempdir();
     let d = dir.path();
-    let table_path = golden_table();
+    let table_path = bayes_table();
+    let table = read_table(Path::new(&table_path));
     let (test, val) = (data("test"), data("val"));
     let run = ok(
         d,
@@ -105,7 +112,7 @@ fn eval_text_markdown_and_plots() {
     assert!(lines[1].starts_with("temperature T = "));
     let header: Vec<&str> = lines[3].split_whitespace().collect();
     let mut want = vec!["metric"];
-    want.extend(methods(true));
+    want.extend(methods(true, &table));
     assert_eq!(header, want);
     for key in METRIC_KEYS.iter().chain(&["T"]) {
         let row = lines
@@ -122,7 +129,7 @@ fn eval_text_markdown_and_plots() {
     assert!(run
         .stdout
         .ends_with(&format!("\nwrote {} plots into plots\n", plots.len())));
-    for method in methods(true) {
+    for method in methods(true, &table) {
         assert!(d.join(format!("plots/reliability_{method}.svg")).is_file());
     }
     for p in &plots {
@@ -133,7 +140,7 @@ fn eval_text_markdown_and_plots() {
 
     let run = ok(d, &eval_args(&table_path, &test, &["--format", "markdown"]));
     let lines: Vec<&str> = run.stdout.lines().collect();
-    let columns = methods(false);
+    let columns = methods(false, &table);
     assert_eq!(lines[0], format!("| metric | {} |", columns.join(" | ")));
     assert_eq!(lines[1], format!("|---|{}", "---:|".repeat(columns.len())));
     assert_eq!(lines.len(), 2 + METRIC_KEYS.len());

@@ -142,3 +142,61 @@ fn a_failing_stdout_is_an_internal_failure() {
     assert!(stderr.starts_with("mlmap: stdout: "), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn inspect_shows_the_bayes_head() {
+    let dir = tempdir();
+    let d = dir.path();
+    let path = bayes_table();
+    let t = read_table(Path::new(&path));
+    let b = t.bayes().unwrap();
+    let v = ok_json(d, &["inspect", &path, "--format", "json"]);
+    let j = &v["bayes"];
+    assert_eq!(j["bins"], 22);
+    assert_eq!(j["lambda"].as_f64().unwrap() as f32, b.lambda());
+    assert_eq!(j["background"], true);
+    let cats = j["categories"].as_array().unwrap();
+    let names: Vec<&str> = cats.iter().map(|c| c["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["car", "cyclist", "pedestrian", "background"]);
+    let total: u64 = (0..4).map(|c| b.rows(c).unwrap()).sum();
+    for (c, cat) in cats.iter().enumerate() {
+        let rows = b.rows(c).unwrap();
+        assert_eq!(cat["rows"], rows);
+        let prior = cat["prior"].as_f64().unwrap();
+        assert!((prior - rows as f64 / total as f64).abs() < 1e-12);
+        // One histogram per logit, its frequencies summing to 1.
+        let freqs = cat["frequencies"].as_array().unwrap();
+        assert_eq!(freqs.len(), 3);
+        for f in freqs {
+            let f: Vec<f64> = f
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            assert_eq!(f.len(), 22);
+            assert!((f.iter().sum::<f64>() - 1.0).abs() < 1e-4, "{f:?}");
+        }
+    }
+    for (j, axis) in j["axes"].as_array().unwrap().iter().enumerate() {
+        let edges = axis["edges"].as_array().unwrap();
+        assert_eq!(edges.len(), 23);
+        assert_eq!(edges[0].as_f64().unwrap() as f32, b.axis(j).unwrap().lo());
+        assert_eq!(edges[22].as_f64().unwrap() as f32, b.axis(j).unwrap().hi());
+    }
+
+    let run = ok(d, &["inspect", &path]);
+    assert!(run.stdout.contains(
+        "Bayes head  22 bins per logit, lambda 1e-3, 4 categories (the classes and background)\n"
+    ));
+    // A sparkline per category and logit.
+    let sparklines = run
+        .stdout
+        .lines()
+        .filter(|l| l.starts_with("  ") && l.ends_with('|') && !l.contains('['))
+        .count();
+    assert_eq!(sparklines, 4 * 3, "{}", run.stdout);
+    // A version-1 table has none.
+    let run = ok(d, &["inspect", &golden_table()]);
+    assert!(run.stdout.contains("\nBayes head  none\n"));
+}

@@ -14,7 +14,7 @@ use std::process::{Command, Stdio};
 
 use mlmap::host::dataset::{DataError, DataSource, Label};
 use mlmap::host::DynTable;
-use mlmap::Libm;
+use mlmap::{FastMath, Libm};
 use npyz::WriterBuilder;
 use serde_json::Value;
 
@@ -158,7 +158,7 @@ fn eval_args<'a>(table: &'a str, test: &'a str, more: &[&'a str]) -> Vec<&'a str
     args
 }
 
-/// `tune` on a small grid: 3 x 8 ML and 2 x 8 MAP candidates.
+/// `tune` on a small grid: 3 x 8 ML, 2 x 8 MAP and 2 x 8 Bayes candidates.
 fn tune_args<'a>(output: &'a str, train: &'a str, val: &'a str) -> Vec<&'a str> {
     vec![
         "tune",
@@ -170,6 +170,8 @@ fn tune_args<'a>(output: &'a str, train: &'a str, val: &'a str) -> Vec<&'a str> 
         "10..12",
         "--bins-map",
         "8,9",
+        "--bins-bayes",
+        "6,20",
         "--lambdas-per-decade",
         "1",
         "--output",
@@ -192,8 +194,14 @@ fn data(name: &str) -> String {
         .into_owned()
 }
 
+/// The fit of `examples/data/train.csv` with every default, the Bayes head included
+/// (format version 2), as shipped in `tables/`.
+fn bayes_table() -> String {
+    repo("tables/default.mlmap").to_string_lossy().into_owned()
+}
+
 /// The linspace fit of `examples/data/train.csv` with the default settings, written by
-/// the independent numpy fit in `tools/mlmap_ref.py`.
+/// the independent numpy fit in `tools/mlmap_ref.py` (format version 1: no Bayes head).
 fn golden_table() -> String {
     repo("tests/golden/train_linspace.mlmap")
         .to_string_lossy()
@@ -310,10 +318,13 @@ fn sorted(keys: &[&str]) -> Vec<String> {
 
 /// One head of the layer as the CLI reports it: `apply` writes `<name>_<class>` score
 /// columns and a `<name>_pred` column, `eval` a `<name>` method, `tune` a `<name>`
-/// section of candidates; all of them hold the layer's scores of that head.
+/// section of candidates; all of them hold the layer's scores of that head. A head the
+/// table does not hold (Bayes in a version-1 table) contributes nothing.
 struct LayerHead {
-    /// Column, method and JSON prefix: `ml`, `map`.
+    /// Column, method and JSON prefix: `ml`, `map`, `bayes`.
     name: &'static str,
+    /// Whether the table holds this head.
+    present: fn(&DynTable) -> bool,
     /// The head's scores of one detection (logits, objectness), as the device
     /// computes them from the table.
     scores: fn(&DynTable, &[f32], f32) -> Vec<f32>,
@@ -324,11 +335,12 @@ struct LayerHead {
 }
 
 /// Every head, in the order of the CLI's columns and reports.
-const HEADS: [LayerHead; 2] = [ML, MAP];
+const HEADS: [LayerHead; 3] = [ML, MAP, BAYES];
 
 /// The maximum-likelihood head.
 const ML: LayerHead = LayerHead {
     name: "ml",
+    present: |_| true,
     scores: |t, x, os| {
         let (mut out, mut scratch) = (vec![0f32; t.k()], vec![0f32; t.k()]);
         t.ml_into(x, os, &mut out, &mut scratch).unwrap();
@@ -341,6 +353,7 @@ const ML: LayerHead = LayerHead {
 /// The maximum a-posteriori head, with the default `Libm` backend.
 const MAP: LayerHead = LayerHead {
     name: "map",
+    present: |_| true,
     scores: |t, x, os| {
         let (mut out, mut scratch) = (vec![0f32; t.k()], vec![0f32; t.k()]);
         t.map_into::<Libm>(x, os, &mut out, &mut scratch).unwrap();
@@ -349,6 +362,26 @@ const MAP: LayerHead = LayerHead {
     bins: DynTable::bins_map,
     lambda: |t| t.settings().lambda_map,
 };
+
+/// The Bayes head, with its device default backend `FastMath` (DESIGN §1.6).
+const BAYES: LayerHead = LayerHead {
+    name: "bayes",
+    present: |t| t.bayes().is_some(),
+    scores: |t, x, os| {
+        let cats = t.bayes().map_or(0, |b| b.categories());
+        let (mut out, mut scratch) = (vec![0f32; t.k()], vec![0f32; cats]);
+        t.bayes_into::<FastMath>(x, os, &mut out, &mut scratch)
+            .unwrap();
+        out
+    },
+    bins: |t| t.bayes().map_or(0, |b| b.bins()),
+    lambda: |t| t.bayes().map_or(0.0, |b| b.lambda()),
+};
+
+/// The heads `table` holds, in the order of the CLI's columns and reports.
+fn heads_of(table: &DynTable) -> impl Iterator<Item = &'static LayerHead> + '_ {
+    HEADS.iter().filter(move |h| (h.present)(table))
+}
 
 impl LayerHead {
     /// The head's scores of one row, as the device computes them.
@@ -367,24 +400,24 @@ impl LayerHead {
     }
 }
 
-/// The methods `eval` reports: the baselines, then every head.
-fn methods(with_temperature: bool) -> Vec<&'static str> {
+/// The methods `eval` reports: the baselines, then every head of `table`.
+fn methods(with_temperature: bool, table: &DynTable) -> Vec<&'static str> {
     let mut m = vec!["sigmoid", "softmax"];
     if with_temperature {
         m.push("temperature");
     }
-    m.extend(HEADS.iter().map(|h| h.name));
+    m.extend(heads_of(table).map(|h| h.name));
     m
 }
 
 /// The score columns `apply` writes after `id` and `label`: every head's class scores,
-/// then every head's predicted class.
-fn score_columns() -> Vec<String> {
+/// then every head's predicted class (the heads of `table`).
+fn score_columns(table: &DynTable) -> Vec<String> {
     let mut cols: Vec<String> = Vec::new();
-    for head in &HEADS {
+    for head in heads_of(table) {
         cols.extend(CLASSES.iter().map(|c| format!("{}_{c}", head.name)));
     }
-    cols.extend(HEADS.iter().map(|h| format!("{}_pred", h.name)));
+    cols.extend(heads_of(table).map(|h| format!("{}_pred", h.name)));
     cols
 }
 
@@ -398,7 +431,7 @@ fn check_scores(table: &DynTable, rows: &[DataRow], header: &[String], records: 
             .unwrap_or_else(|| panic!("no column {name} in {header:?}"))
     };
     assert_eq!(records.len(), rows.len());
-    for head in &HEADS {
+    for head in heads_of(table) {
         let cols: Vec<usize> = CLASSES
             .iter()
             .map(|c| column(format!("{}_{c}", head.name)))

@@ -5,8 +5,30 @@ use mlmap::{EdgeMode, UpperTail};
 
 use super::*;
 
-/// Candidates of [`tune_args`]' grid per head: 3 x 8 (ML), 2 x 8 (MAP).
-const CANDIDATES: [(&str, usize); 2] = [("ml", 3 * 8), ("map", 2 * 8)];
+/// Candidates of [`tune_args`]' grid per head: 3 x 8 (ML), 2 x 8 (MAP), 2 x 8 (Bayes).
+const CANDIDATES: [(&str, usize); 3] = [("ml", 3 * 8), ("map", 2 * 8), ("bayes", 2 * 8)];
+
+/// Candidates are ordered within the guards first, each group by the objective's
+/// value (within the guards) or by how much they lose (beyond them).
+fn check_order(name: &str, cands: &[Value], objective: &str) {
+    let within: Vec<bool> = cands
+        .iter()
+        .map(|c| c["within_guards"].as_bool().unwrap())
+        .collect();
+    assert!(
+        within.windows(2).all(|w| w[0] >= w[1]),
+        "{name}: {within:?}"
+    );
+    let values: Vec<f64> = cands
+        .iter()
+        .filter(|c| c["within_guards"] == true)
+        .map(|c| c[objective].as_f64().unwrap())
+        .collect();
+    assert!(
+        values.windows(2).all(|w| w[0] <= w[1]),
+        "{name}: {values:?}"
+    );
+}
 
 fn candidates(head: &LayerHead) -> usize {
     CANDIDATES
@@ -35,8 +57,7 @@ fn tune_writes_the_best_candidates_and_its_objective_matches_the_metrics() {
         assert_eq!(v["candidates"][name], candidates(head), "{name}");
         let cands = v[name].as_array().unwrap();
         assert_eq!(cands.len(), 3);
-        let ece: Vec<f64> = cands.iter().map(|c| c["ece"].as_f64().unwrap()).collect();
-        assert!(ece.windows(2).all(|w| w[0] <= w[1]), "{name}: {ece:?}");
+        check_order(name, cands, "ece");
         let best = &cands[0];
         assert_eq!(best["rank"], 1);
         assert_eq!(
@@ -53,7 +74,13 @@ fn tune_writes_the_best_candidates_and_its_objective_matches_the_metrics() {
         // them from the scores of the written table.
         let scores = head.flat_scores(&t, &val_rows);
         let m = metrics::evaluate(&scores, 3, &labels, &MetricsConfig::default()).unwrap();
-        for (key, want) in [("ece", m.ece), ("nll", m.nll.unwrap()), ("brier", m.brier)] {
+        let map = m.mean_ap().unwrap();
+        for (key, want) in [
+            ("ece", m.ece),
+            ("nll", m.nll.unwrap()),
+            ("brier", m.brier),
+            ("mean_ap", map),
+        ] {
             let got = best[key].as_f64().unwrap();
             assert!(
                 (got - want).abs() <= 1e-12,
@@ -70,10 +97,13 @@ fn tune_writes_the_best_candidates_and_its_objective_matches_the_metrics() {
     );
     assert!(run
         .stdout
-        .starts_with("ML head: best 5 of 24 candidates by ece\n"));
+        .starts_with("ML head: best 5 of 24 candidates by ece, within the guards first\n"));
     assert!(run
         .stdout
-        .contains("MAP head: best 5 of 16 candidates by ece\n"));
+        .contains("MAP head: best 5 of 16 candidates by ece, within the guards first\n"));
+    assert!(run
+        .stdout
+        .contains("Bayes head: best 5 of 16 candidates by ece, within the guards first\n"));
     let rank1: Vec<Vec<&str>> = run
         .stdout
         .lines()
@@ -119,21 +149,162 @@ fn tune_ranks_by_the_chosen_objective() {
         let v = ok_json(d, &args);
         assert_eq!(v["objective"], objective);
         for head in &HEADS {
-            let values: Vec<f64> = v[head.name]
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|c| c[objective].as_f64().unwrap())
-                .collect();
-            assert_eq!(values.len(), candidates(head));
-            assert!(
-                values.windows(2).all(|w| w[0] <= w[1]),
-                "{}: {values:?}",
-                head.name
-            );
+            let cands = v[head.name].as_array().unwrap();
+            assert_eq!(cands.len(), candidates(head));
+            check_order(head.name, cands, objective);
         }
         let t = read_table(&d.join("t.mlmap"));
         assert_eq!(t.settings().upper_tail, UpperTail::Clamp);
         assert_eq!(t.settings().edge_mode, EdgeMode::Matlab);
+    }
+}
+
+#[test]
+fn tune_with_never_seen_objects_guards_and_compares_every_head() {
+    let dir = tempdir();
+    let d = dir.path();
+    let (train, val, ood) = (data("train"), data("val"), data("ood"));
+    let mut args = tune_args("t.mlmap", &train, &val);
+    args.extend([
+        "--ood",
+        &ood,
+        "--max-accuracy-loss",
+        "0",
+        "--max-map-loss",
+        "0",
+        "--format",
+        "json",
+        "--top",
+        "100",
+    ]);
+    let v = ok_json(d, &args);
+    let t = read_table(&d.join("t.mlmap"));
+    let cmp = &v["validation"];
+    let val_rows = rows_of(Path::new(&val));
+    assert_eq!(cmp["rows"], val_rows.len() + 2000);
+    assert_eq!(cmp["ood_rows"], 2000);
+    let methods = &cmp["methods"];
+    assert_eq!(
+        keys(methods),
+        sorted(&["softmax", "temperature", "ml", "map", "bayes"])
+    );
+    // Softmax's accuracy, counted by hand: its decision is the largest logit (the
+    // never-seen rows are background and do not count).
+    let labels = class_labels(&val_rows);
+    let correct = val_rows
+        .iter()
+        .zip(&labels)
+        .filter(|(r, l)| {
+            let top = (0..3)
+                .max_by(|&a, &b| r.logits[a].total_cmp(&r.logits[b]))
+                .unwrap();
+            **l == Some(top)
+        })
+        .count();
+    let labelled = labels.iter().filter(|l| l.is_some()).count();
+    let softmax_acc = methods["softmax"]["accuracy"].as_f64().unwrap();
+    assert!((softmax_acc - correct as f64 / labelled as f64).abs() < 1e-12);
+    let softmax_map = methods["softmax"]["mean_ap"].as_f64().unwrap();
+    for head in &HEADS {
+        let name = head.name;
+        let cands = v[name].as_array().unwrap();
+        assert_eq!(cands.len(), candidates(head));
+        check_order(name, cands, "ece");
+        // With no loss allowed, a candidate is within the guards exactly when it keeps
+        // softmax's accuracy and mAP.
+        for c in cands {
+            let keeps = c["accuracy"].as_f64().unwrap() >= softmax_acc - 1e-12
+                && c["mean_ap"].as_f64().unwrap() >= softmax_map - 1e-12;
+            assert_eq!(c["within_guards"].as_bool().unwrap(), keeps, "{name}: {c}");
+        }
+        // The comparison reports the written head, whose metrics are the chosen
+        // candidate's (same rows, same scores).
+        let chosen = &methods[name];
+        assert_eq!(chosen["bins"], cands[0]["bins"], "{name}");
+        assert_eq!(chosen["bins"].as_u64().unwrap() as usize, (head.bins)(&t));
+        assert_eq!(chosen["lambda"].as_f64().unwrap() as f32, (head.lambda)(&t));
+        for key in ["ece", "accuracy", "mean_ap"] {
+            let (a, b) = (
+                chosen[key].as_f64().unwrap(),
+                cands[0][key].as_f64().unwrap(),
+            );
+            assert!((a - b).abs() <= 1e-12, "{name} {key}: {a} vs {b}");
+        }
+        assert!(chosen["ood_mean"].as_f64().unwrap() > 0.0);
+    }
+    // The best head is the one with the lowest ECE among those within the guards.
+    let within: Vec<(&str, f64)> = ["ml", "map", "bayes"]
+        .into_iter()
+        .filter(|h| methods[*h]["within_guards"] == true)
+        .map(|h| (h, methods[h]["ece"].as_f64().unwrap()))
+        .collect();
+    let best = within
+        .iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|b| b.0);
+    assert_eq!(cmp["best"].as_str(), best);
+
+    // The text report prints the same comparison and names the best head.
+    let mut args = tune_args("t2.mlmap", &train, &val);
+    args.extend(["--ood", &ood]);
+    let run = ok(d, &args);
+    assert!(run.stdout.contains("(2000 never-seen, as background)"));
+    let header = run
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("metric "))
+        .unwrap();
+    let cols: Vec<&str> = header.split_whitespace().collect();
+    assert_eq!(
+        cols,
+        ["metric", "softmax", "temperature", "ml", "map", "bayes"]
+    );
+    for key in [
+        "ece", "nll", "brier", "accuracy", "mAP", "auroc", "ood_mean",
+    ] {
+        assert!(
+            run.stdout
+                .lines()
+                .any(|l| l.split_whitespace().next() == Some(key)),
+            "{key}:\n{}",
+            run.stdout
+        );
+    }
+    assert!(
+        run.stdout
+            .contains("best head by ece within the accuracy and mAP guards: ")
+            || run
+                .stdout
+                .contains("no head is within the accuracy and mAP guards"),
+        "{}",
+        run.stdout
+    );
+    assert!(run.stdout.contains("  Bayes "));
+}
+
+#[test]
+fn tune_without_the_bayes_head_and_bad_guards() {
+    let dir = tempdir();
+    let d = dir.path();
+    let (train, val) = (data("train"), data("val"));
+    let mut args = tune_args("t.mlmap", &train, &val);
+    args.retain(|a| *a != "--bins-bayes" && *a != "6,20");
+    args.extend(["--no-bayes", "--format", "json"]);
+    let v = ok_json(d, &args);
+    assert!(read_table(&d.join("t.mlmap")).bayes().is_none());
+    assert!(v.get("bayes").is_none());
+    assert!(v["validation"]["methods"].get("bayes").is_none());
+    assert!(v["validation"]["methods"]["softmax"]
+        .get("ood_mean")
+        .is_none());
+
+    for (flag, value) in [
+        ("--max-accuracy-loss", "-0.1"),
+        ("--max-map-loss", "nan"),
+        ("--lambda-bayes-max", "2"),
+    ] {
+        let mut args = tune_args("u.mlmap", &train, &val);
+        args.extend([flag, value]);
+        refused(d, &args, &[flag]);
     }
 }

@@ -32,11 +32,11 @@ pub struct Cli {
 pub enum Command {
     /// Fit a table from training logits.
     Fit(FitArgs),
-    /// Choose bin counts and lambdas on validation data, and write the best table.
+    /// Choose bin counts and lambdas of every head on validation data, and write the best table.
     Tune(TuneArgs),
     /// Score every row of a file through the layer and write the scores as CSV.
     Apply(ApplyArgs),
-    /// Compare sigmoid, softmax, temperature, ML and MAP on labelled data.
+    /// Compare sigmoid, softmax, temperature, ML, MAP and Bayes on labelled data.
     Eval(EvalArgs),
     /// Print a readable summary of a table.
     Inspect(InspectArgs),
@@ -117,6 +117,9 @@ pub struct TuneArgs {
     /// Validation data the candidates are scored on.
     #[arg(long, value_name = "FILE")]
     pub val: PathBuf,
+    /// Never-seen objects (labels ignored): they join the validation rows as background.
+    #[arg(long, value_name = "FILE")]
+    pub ood: Option<PathBuf>,
     /// What to minimise.
     #[arg(long, value_parser = named::<Objective>(), default_value = Objective::Ece.flag())]
     pub objective: Objective,
@@ -126,7 +129,35 @@ pub struct TuneArgs {
     /// MAP bin counts to try: `N`, `A..B` (inclusive) or `A,B,C`.
     #[arg(long, default_value = "4..40", value_name = "SET")]
     pub bins_map: String,
-    /// Smallest lambda of the log grid (both heads).
+    /// Bayes bin counts per logit to try: `N`, `A..B` (inclusive) or `A,B,C`.
+    #[arg(long, default_value = "4..40", value_name = "SET")]
+    pub bins_bayes: String,
+    /// Smallest Bayes lambda (default: --lambda-min), in (0, 1].
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    pub lambda_bayes_min: Option<f64>,
+    /// Largest Bayes lambda (default: --lambda-max), in (0, 1].
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    pub lambda_bayes_max: Option<f64>,
+    /// Leave the Bayes head out of the search and of the table.
+    #[arg(long, conflicts_with_all = ["bins_bayes", "lambda_bayes_min", "lambda_bayes_max"])]
+    pub no_bayes: bool,
+    /// Largest top-1 accuracy a chosen candidate may lose against softmax (0.005 = half a point).
+    #[arg(
+        long,
+        default_value_t = 0.005,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
+    pub max_accuracy_loss: f64,
+    /// Largest mAP a chosen candidate may lose against softmax (0.01 = one point).
+    #[arg(
+        long,
+        default_value_t = 0.01,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
+    pub max_map_loss: f64,
+    /// Smallest lambda of the log grid (ML and MAP; Bayes too unless --lambda-bayes-min).
     #[arg(
         long,
         default_value_t = 1e-8,
@@ -134,7 +165,7 @@ pub struct TuneArgs {
         allow_negative_numbers = true
     )]
     pub lambda_min: f64,
-    /// Largest lambda of the log grid (both heads).
+    /// Largest lambda of the log grid (ML and MAP; Bayes too unless --lambda-bayes-max).
     #[arg(
         long,
         default_value_t = 1e-1,

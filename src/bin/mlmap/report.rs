@@ -7,7 +7,7 @@ use std::path::Path;
 
 use mlmap::host::eval::Evaluation;
 use mlmap::host::names::Named;
-use mlmap::host::tune::{Candidate, Objective, TuneResult};
+use mlmap::host::tune::{Candidate, Comparison, Objective, TuneParams, TuneResult, Tuned};
 use mlmap::host::DynTable;
 
 use crate::args::Format;
@@ -180,7 +180,7 @@ fn fmt_opt(v: Option<f64>) -> String {
 }
 
 /// The best `top` candidates of each head as an aligned table; `searched(head)` is the
-/// number of candidates searched.
+/// number of candidates searched. Candidates beyond the guards are marked `*`.
 pub fn candidates(
     result: &TuneResult,
     objective: Objective,
@@ -192,71 +192,208 @@ pub fn candidates(
         let cands = &h.candidates;
         let _ = writeln!(
             s,
-            "{} head: best {} of {} candidates by {objective}",
+            "{} head: best {} of {} candidates by {objective}, within the guards first",
             h.head,
             top.min(cands.len()),
             searched(h.head),
         );
+        if cands.first().is_some_and(|c| !c.eligible()) {
+            let _ = writeln!(
+                s,
+                "  no candidate is within the accuracy and mAP guards: chose the one that loses least"
+            );
+        }
         let _ = writeln!(
             s,
-            "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9} {:>9}",
-            "rank", "bins", "lambda", "ece", "nll", "brier", "accuracy"
+            "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            "rank", "bins", "lambda", "ece", "nll", "brier", "accuracy", "mAP"
         );
         for (i, c) in cands.iter().take(top).enumerate() {
             let _ = writeln!(
                 s,
-                "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9} {:>9}",
+                "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9} {:>9} {:>9}{}",
                 i + 1,
                 c.bins,
                 c.lambda,
                 fmt_opt(c.ece),
                 fmt_opt(c.nll),
                 fmt_opt(c.brier),
-                fmt_opt(c.accuracy)
+                fmt_opt(c.accuracy),
+                fmt_opt(c.mean_ap),
+                if c.eligible() { "" } else { " *" }
             );
         }
     }
     s
 }
 
-/// The best `top` candidates of each head as one JSON object, values at full precision.
-pub fn candidates_json(
-    result: &TuneResult,
-    objective: Objective,
+/// The keys of the comparison of `tune`, in print order.
+const COMPARED: [&str; 6] = ["ece", "nll", "brier", "accuracy", "mAP", "auroc"];
+
+/// The comparison's value of `key` for one method.
+fn compared_value(m: &mlmap::host::metrics::Metrics, key: &str) -> Option<f64> {
+    match key {
+        "ece" => Some(m.ece),
+        "nll" => m.nll,
+        "brier" => Some(m.brier),
+        "accuracy" => m.accuracy,
+        "mAP" => m.mean_ap(),
+        "auroc" => m.auroc,
+        "ood_mean" => m.ood.map(|o| o.ood_mean),
+        _ => None,
+    }
+}
+
+/// The keys of the comparison, `ood_mean` with never-seen objects.
+fn compared_keys(c: &Comparison) -> Vec<&'static str> {
+    let mut keys = COMPARED.to_vec();
+    if c.ood_rows.is_some() {
+        keys.push("ood_mean");
+    }
+    keys
+}
+
+/// The sentence naming the head to ship.
+fn best_sentence(c: &Comparison, objective: Objective) -> String {
+    match c.best {
+        Some(m) => format!(
+            "best head by {objective} within the accuracy and mAP guards: {}",
+            m.title()
+        ),
+        None => "no head is within the accuracy and mAP guards against softmax".into(),
+    }
+}
+
+/// Every head at its chosen settings, softmax and temperature scaling on the
+/// validation rows, as an aligned table and the sentence naming the best head.
+pub fn comparison(c: &Comparison, objective: Objective) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "validation metrics at the chosen settings: {} rows{}; {}",
+        c.rows,
+        c.ood_rows.map_or(String::new(), |n| format!(
+            " ({n} never-seen, as background)"
+        )),
+        c.temperature.map_or_else(
+            || "no temperature (no row labelled with a class)".into(),
+            |t| format!("temperature T = {t:.4}")
+        )
+    );
+    let _ = write!(s, "{:<9}", "metric");
+    for m in &c.methods {
+        let _ = write!(s, " {:>12}", m.method.name());
+    }
+    s.push('\n');
+    for key in compared_keys(c) {
+        let _ = write!(s, "{key:<9}");
+        for m in &c.methods {
+            let _ = write!(s, " {:>12}", fmt_value(compared_value(&m.metrics, key)));
+        }
+        s.push('\n');
+    }
+    let _ = write!(s, "{:<9}", "guards");
+    for m in &c.methods {
+        let mark = match m.method.head() {
+            None => "",
+            Some(_) if m.excess == 0.0 => "ok",
+            Some(_) => "loses",
+        };
+        let _ = write!(s, " {mark:>12}");
+    }
+    s.push('\n');
+    let _ = writeln!(s, "{}", best_sentence(c, objective));
+    s
+}
+
+/// One candidate in JSON, values at full precision.
+fn candidate_json(c: &Candidate) -> serde_json::Value {
+    serde_json::json!({
+        "bins": c.bins,
+        "lambda": c.lambda,
+        "objective": finite(c.objective),
+        "ece": c.ece,
+        "nll": c.nll,
+        "brier": c.brier,
+        "accuracy": c.accuracy,
+        "mean_ap": c.mean_ap,
+        "within_guards": c.eligible(),
+    })
+}
+
+/// A finite number, or null.
+fn finite(v: f64) -> serde_json::Value {
+    if v.is_finite() {
+        serde_json::json!(v)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// The result of `tune` as one JSON object: per head the best `top` candidates, the
+/// comparison on the validation rows, and the written table.
+pub fn tune_json(
+    tuned: &Tuned,
+    params: &TuneParams,
     top: usize,
-    searched: impl Fn(mlmap::Head) -> usize,
     table_path: &Path,
     table_bytes: usize,
 ) -> String {
-    let head = |cands: &[Candidate]| -> Vec<serde_json::Value> {
-        cands
+    let result = &tuned.result;
+    let mut v = serde_json::Map::new();
+    v.insert("objective".into(), params.objective.name().into());
+    let counts: serde_json::Map<String, serde_json::Value> = result
+        .heads
+        .iter()
+        .map(|h| (h.head.name().to_string(), params.candidates(h.head).into()))
+        .collect();
+    v.insert("candidates".into(), counts.into());
+    for h in &result.heads {
+        let list: Vec<serde_json::Value> = h
+            .candidates
             .iter()
             .take(top)
             .enumerate()
             .map(|(i, c)| {
-                serde_json::json!({
-                    "rank": i + 1,
-                    "bins": c.bins,
-                    "lambda": c.lambda,
-                    "ece": c.ece,
-                    "nll": c.nll,
-                    "brier": c.brier,
-                    "accuracy": c.accuracy,
-                })
+                let mut j = candidate_json(c);
+                if let Some(o) = j.as_object_mut() {
+                    o.insert("rank".into(), (i + 1).into());
+                }
+                j
             })
-            .collect()
-    };
-    let mut v = serde_json::Map::new();
-    v.insert("objective".into(), objective.name().into());
-    let counts: serde_json::Map<String, serde_json::Value> = result
-        .heads
-        .iter()
-        .map(|h| (h.head.name().to_string(), searched(h.head).into()))
-        .collect();
-    v.insert("candidates".into(), counts.into());
-    for h in &result.heads {
-        v.insert(h.head.name().to_string(), head(&h.candidates).into());
+            .collect();
+        v.insert(h.head.name().to_string(), list.into());
     }
+    let c = &tuned.comparison;
+    let mut methods = serde_json::Map::new();
+    for m in &c.methods {
+        let mut o = serde_json::Map::new();
+        for key in compared_keys(c) {
+            let name = if key == "mAP" { "mean_ap" } else { key };
+            let value = compared_value(&m.metrics, key)
+                .filter(|x| x.is_finite())
+                .map_or(serde_json::Value::Null, |x| serde_json::json!(x));
+            o.insert(name.into(), value);
+        }
+        if let Some(ch) = &m.chosen {
+            o.insert("bins".into(), ch.bins.into());
+            o.insert("lambda".into(), serde_json::json!(ch.lambda));
+            o.insert("within_guards".into(), (m.excess == 0.0).into());
+        }
+        methods.insert(m.method.name().to_string(), o.into());
+    }
+    v.insert(
+        "validation".into(),
+        serde_json::json!({
+            "rows": c.rows,
+            "ood_rows": c.ood_rows,
+            "temperature": c.temperature,
+            "max_accuracy_loss": params.guards.max_accuracy_loss,
+            "max_map_loss": params.guards.max_map_loss,
+            "methods": methods,
+            "best": c.best.map(|m| m.name()),
+        }),
+    );
     v.insert(
         "table".into(),
         serde_json::json!({ "path": table_path.display().to_string(), "bytes": table_bytes }),
@@ -284,6 +421,20 @@ pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
         table.bins_map(),
         st.lambda_map
     );
+    match table.bayes() {
+        Some(b) => {
+            let _ = writeln!(
+                s,
+                "  Bayes {:>3} bins, lambda {:e}, {} categories",
+                b.bins(),
+                b.lambda(),
+                b.categories()
+            );
+        }
+        None => {
+            let _ = writeln!(s, "  Bayes none");
+        }
+    }
     let rows: Vec<String> = table
         .class_names()
         .zip(table.rows())

@@ -1,11 +1,13 @@
 //! Running sums: compensated summation, and the [`Accumulator`] of the metrics that
 //! can be computed in one pass without storing scores (`ece`, `mce`, `nll`, `brier`,
-//! `accuracy`).
+//! `accuracy`), and optionally the average precision of each class (which keeps one
+//! sort key per row and class).
 
 use std::vec::Vec;
 
 use super::binning::{calibration, BinSum, CalibrationBin, Edges};
 use super::outcome::{outcome, Outcome};
+use super::ranking::{average_precision, pr_key, pr_points_of_keys};
 use super::{MetricsConfig, MetricsError, NLL_FLOOR};
 
 /// Neumaier's compensated sum: the error does not grow with the number of terms.
@@ -58,6 +60,8 @@ pub struct Parts {
     pub nll: bool,
     /// `brier`: a square per score.
     pub brier: bool,
+    /// `ap_<class>` and their mean: a sort key per row and class, sorted at the end.
+    pub ranking: bool,
 }
 
 impl Parts {
@@ -66,6 +70,7 @@ impl Parts {
         calibration: true,
         nll: true,
         brier: true,
+        ranking: true,
     };
 }
 
@@ -96,6 +101,8 @@ pub struct Accumulator {
     bins: Option<Vec<BinSum>>,
     nll: Option<(Sum, usize)>,
     brier: Option<Sum>,
+    /// Per class, the precision-recall sort key of every row (with `ranking`).
+    ranking: Option<Vec<Vec<u64>>>,
     rows: usize,
     labelled: usize,
     correct: usize,
@@ -120,6 +127,7 @@ impl Accumulator {
             bins,
             nll: parts.nll.then(|| (Sum::default(), 0)),
             brier: parts.brier.then(Sum::default),
+            ranking: parts.ranking.then(Vec::new),
             rows: 0,
             labelled: 0,
             correct: 0,
@@ -159,6 +167,14 @@ impl Accumulator {
                 let s: f64 = scores.get(l).map_or(0.0, |&s| s.into());
                 sum.add(-s.max(NLL_FLOOR).ln());
                 *n += 1;
+            }
+        }
+        if let Some(keys) = &mut self.ranking {
+            if keys.len() < scores.len() {
+                keys.resize_with(scores.len(), Vec::new);
+            }
+            for (i, (class_keys, &s)) in keys.iter_mut().zip(scores).enumerate() {
+                class_keys.push(pr_key(s.into(), label == Some(i)));
             }
         }
         if let Some(sum) = &mut self.brier {
@@ -206,9 +222,60 @@ impl Accumulator {
             .map(|(sum, n)| sum.value() / n as f64)
     }
 
+    /// `ap_<class>` of every class seen, as [`average_precision`] of the metrics core
+    /// (`None` for a class without positives); `None` unless ranking is kept.
+    pub fn average_precisions(&self) -> Option<Vec<Option<f64>>> {
+        let keys = self.ranking.as_ref()?;
+        Some(
+            keys.iter()
+                .map(|k| average_precision(&pr_points_of_keys(k.clone())))
+                .collect(),
+        )
+    }
+
+    /// `mAP`, the mean of the defined `ap_<class>` ([`Metrics::mean_ap`](super::Metrics::mean_ap));
+    /// `None` unless ranking is kept or when no class has a positive row.
+    pub fn mean_ap(&self) -> Option<f64> {
+        super::mean_of_defined(&self.average_precisions()?)
+    }
+
     /// `brier`, the mean over rows of `sum_i (s_i - y_i)^2` (0 without rows); `None`
     /// unless kept.
     pub fn brier(&self) -> Option<f64> {
         self.brier.map(|sum| sum.value() / self.rows.max(1) as f64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn average_precision_by_hand() {
+        // Class 0: positives at scores 0.8 and 0.35, negatives at 0.4 and 0.1:
+        // precision 1 at recall 1/2, then 2/3 at recall 1: AP = 1/2 + 1/3.
+        // Class 1: its only positive ranks first: AP = 1.
+        let rows: [([f64; 2], Option<usize>); 4] = [
+            ([0.8, 0.1], Some(0)),
+            ([0.4, 0.3], None),
+            ([0.35, 0.6], Some(0)),
+            ([0.1, 0.9], Some(1)),
+        ];
+        let mut acc = Accumulator::new(&MetricsConfig::default(), Parts::ALL).unwrap();
+        for (s, l) in &rows {
+            acc.add(s, &[] as &[f64], *l);
+        }
+        let ap = acc.average_precisions().unwrap();
+        assert!((ap[0].unwrap() - (0.5 + 1.0 / 3.0)).abs() < 1e-12, "{ap:?}");
+        assert_eq!(ap[1], Some(1.0));
+        let want = (0.5 + 1.0 / 3.0 + 1.0) / 2.0;
+        assert!((acc.mean_ap().unwrap() - want).abs() < 1e-12);
+        // Without the ranking part there is no mAP.
+        let parts = Parts {
+            ranking: false,
+            ..Parts::ALL
+        };
+        let acc = Accumulator::new(&MetricsConfig::default(), parts).unwrap();
+        assert_eq!(acc.mean_ap(), None);
     }
 }

@@ -194,6 +194,12 @@ impl Metrics {
         "ece", "mce", "nll", "brier", "tp_mean", "tp_var", "fp_mean", "fp_var", "auroc", "accuracy",
     ];
 
+    /// `mAP`: the mean of the defined `ap_<class>`; `None` when no class has a
+    /// positive row.
+    pub fn mean_ap(&self) -> Option<f64> {
+        mean_of_defined(&self.ap)
+    }
+
     /// Attaches the metrics of an out-of-distribution set.
     pub fn with_ood(mut self, ood: OodMetrics) -> Self {
         self.ood = Some(ood);
@@ -265,6 +271,7 @@ pub fn reliability(outcomes: &[Outcome], cfg: &MetricsConfig) -> Result<Reliabil
         calibration: true,
         nll: false,
         brier: false,
+        ranking: false,
     };
     let mut acc = Accumulator::new(cfg, parts)?;
     for o in outcomes {
@@ -372,6 +379,12 @@ pub fn evaluate_with_logits(
         fp: n - tp,
         reliability,
     })
+}
+
+/// The mean of the defined values; `None` when none is.
+fn mean_of_defined(values: &[Option<f64>]) -> Option<f64> {
+    let defined: Vec<f64> = values.iter().flatten().copied().collect();
+    (!defined.is_empty()).then(|| defined.iter().sum::<f64>() / defined.len() as f64)
 }
 
 /// `ood_mean` and `ood_over_0_9` of an out-of-distribution set (labels are not used).

@@ -64,11 +64,22 @@ pub(super) fn pr_points(
     labels: &[Option<usize>],
     class: usize,
 ) -> Vec<PrPoint> {
-    let mut v: Vec<u64> = scores
+    let v: Vec<u64> = scores
         .chunks_exact(k)
         .zip(labels)
         .map(|(row, l)| key(row.get(class).copied().unwrap_or(0.0), *l == Some(class)))
         .collect();
+    pr_points_of_keys(v)
+}
+
+/// The sort key of one row's score of a class and whether the row is a positive of it,
+/// for [`pr_points_of_keys`].
+pub(super) fn pr_key(score: f64, positive: bool) -> u64 {
+    key(score, positive)
+}
+
+/// Precision-recall points from the [`pr_key`]s of every row (in any order).
+pub(super) fn pr_points_of_keys(mut v: Vec<u64>) -> Vec<PrPoint> {
     let positives = v.iter().filter(|&&x| x & 1 == 1).count();
     if positives == 0 {
         return Vec::new();

@@ -143,6 +143,7 @@ pub(super) fn method_color(method: &str) -> RGBColor {
         "temperature" => RGBColor(204, 121, 167),
         "ml" => RGBColor(0, 114, 178),
         "map" => RGBColor(0, 158, 115),
+        "bayes" => RGBColor(0, 0, 0),
         other => {
             const OTHERS: [RGBColor; 3] = [
                 RGBColor(86, 180, 233),

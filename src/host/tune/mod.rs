@@ -1,25 +1,33 @@
-//! Hyper-parameter search for both heads (`mlmap tune`).
+//! Hyper-parameter search for the three heads (`mlmap tune`).
 //!
-//! The ML head depends only on `(B_ML, lambda_ML)` and the MAP head only on
-//! `(B_MAP, lambda_MAP)`, so each head is searched on its own grid. The expensive parts
+//! The ML head depends only on `(B_ML, lambda_ML)`, the MAP head only on
+//! `(B_MAP, lambda_MAP)` and the Bayes head only on `(B_Bayes, lambda_Bayes)`, so each
+//! head is searched on its own grid. The expensive parts
 //! are done once: the Gaussian prior of every validation logit once for the whole
 //! search, the likelihoods once per bin count (one histogram lookup per class and row).
 //! Each lambda candidate is then one pass of additions and the layer's own
 //! normalisation ([`scores_from_evidence`]), so a candidate's scores are bit for bit
 //! the scores the layer will produce with the written table. The objective is
 //! accumulated on the fly by the metrics module's [`Accumulator`], without storing
-//! scores.
+//! scores. A Bayes candidate is scored by the layer itself, from a table holding that
+//! candidate's head ([`search_bayes`]).
+//!
+//! Every candidate also gets its top-1 accuracy and mAP, and [`Guards`] keep a
+//! candidate that loses more of either than allowed against softmax
+//! ([`Reference`]) behind every candidate that does not.
 //!
 //! [`search`] works on rows and histograms; [`tune`] runs the whole job on a training
 //! set and a validation file and builds the table of the best candidates.
 
+mod bayes;
 mod pipeline;
 
 use std::prelude::rust_2021::*;
 use std::{format, vec};
 
-pub use self::pipeline::{tune, TuneParams, Tuned};
-use crate::host::metrics::{Accumulator, MetricsConfig, Parts};
+pub use self::bayes::{search_bayes, BayesSearchParams};
+pub use self::pipeline::{tune, BayesGrid, Compared, Comparison, TuneParams, Tuned};
+use crate::host::metrics::{Accumulator, Metrics, MetricsConfig, Parts};
 use crate::host::names::{Name, Named};
 use crate::{scores_from_evidence, Gaussian, Head, Histogram, Libm, UpperTail};
 
@@ -58,7 +66,107 @@ impl Objective {
             calibration: self == Self::Ece,
             nll: self == Self::Nll,
             brier: self == Self::Brier,
+            ranking: false,
         }
+    }
+
+    /// The objective's value in `m` (`None` when undefined).
+    pub fn of(self, m: &Metrics) -> Option<f64> {
+        match self {
+            Self::Ece => Some(m.ece),
+            Self::Nll => m.nll,
+            Self::Brier => Some(m.brier),
+        }
+    }
+}
+
+/// How much top-1 accuracy and mAP a candidate may lose against softmax on the
+/// validation rows and still be chosen.
+///
+/// # Parameters
+///
+/// | Name | Default | Purpose |
+/// |---|---|---|
+/// | `max_accuracy_loss` | 0.005 (half a point) | largest allowed drop of `accuracy` |
+/// | `max_map_loss` | 0.01 (one point) | largest allowed drop of mAP, the mean of `ap_<class>` |
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Guards {
+    /// Largest allowed drop of top-1 accuracy.
+    pub max_accuracy_loss: f64,
+    /// Largest allowed drop of mAP.
+    pub max_map_loss: f64,
+}
+
+impl Default for Guards {
+    fn default() -> Self {
+        Self {
+            max_accuracy_loss: 0.005,
+            max_map_loss: 0.01,
+        }
+    }
+}
+
+/// What the [`Guards`] compare against: softmax's accuracy and mAP on the rows the
+/// candidates are scored on.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Reference {
+    /// Softmax's top-1 accuracy; `None` when undefined (no guard on accuracy).
+    pub accuracy: Option<f64>,
+    /// Softmax's mAP; `None` when undefined (no guard on mAP).
+    pub mean_ap: Option<f64>,
+}
+
+impl Guards {
+    /// Checks that both losses are finite and not negative.
+    ///
+    /// # Errors
+    ///
+    /// A message naming the flag at fault.
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("--max-accuracy-loss", self.max_accuracy_loss),
+            ("--max-map-loss", self.max_map_loss),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("{name} must be a number >= 0, not {v}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// How much more than allowed `accuracy` and `mean_ap` lose against `reference`
+    /// (the larger of the two excesses): 0 within the guards, `+inf` for a metric that
+    /// is undefined where the reference's is not.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use mlmap::host::tune::{Guards, Reference};
+    ///
+    /// let g = Guards::default();
+    /// let softmax = Reference { accuracy: Some(0.95), mean_ap: Some(0.80) };
+    /// assert_eq!(g.excess(Some(0.946), Some(0.85), &softmax), 0.0);
+    /// assert!((g.excess(Some(0.94), Some(0.80), &softmax) - 0.005).abs() < 1e-12);
+    /// assert!((g.excess(Some(0.95), Some(0.77), &softmax) - 0.02).abs() < 1e-12);
+    /// ```
+    pub fn excess(
+        &self,
+        accuracy: Option<f64>,
+        mean_ap: Option<f64>,
+        reference: &Reference,
+    ) -> f64 {
+        // A loss equal to the allowance up to rounding is within it.
+        let over = |got: Option<f64>, want: Option<f64>, allowed: f64| match (got, want) {
+            (_, None) => 0.0,
+            (None, Some(_)) => f64::INFINITY,
+            (Some(g), Some(w)) if w - g <= allowed + 1e-12 => 0.0,
+            (Some(g), Some(w)) => w - g - allowed,
+        };
+        over(accuracy, reference.accuracy, self.max_accuracy_loss).max(over(
+            mean_ap,
+            reference.mean_ap,
+            self.max_map_loss,
+        ))
     }
 }
 
@@ -86,6 +194,9 @@ pub struct Candidate {
     pub lambda: f32,
     /// The objective's value (lower is better; a missing NLL counts as +inf).
     pub objective: f64,
+    /// How much more accuracy or mAP than [`Guards`] allow the candidate loses against
+    /// softmax ([`Guards::excess`]): 0 for an eligible candidate.
+    pub excess: f64,
     /// Expected calibration error (10 bins, DESIGN default binning); computed for the
     /// best candidates only (see [`search`]).
     pub ece: Option<f64>,
@@ -93,8 +204,119 @@ pub struct Candidate {
     pub nll: Option<f64>,
     /// Mean Brier score; for the best candidates only.
     pub brier: Option<f64>,
-    /// Top-1 accuracy of the labelled rows (DESIGN §1.5); for the best candidates only.
+    /// Top-1 accuracy of the labelled rows (DESIGN §1.5); every candidate.
     pub accuracy: Option<f64>,
+    /// mAP, the mean of `ap_<class>` (DESIGN §1.5); every candidate.
+    pub mean_ap: Option<f64>,
+}
+
+impl Candidate {
+    /// Whether the candidate is within the guards.
+    pub fn eligible(&self) -> bool {
+        self.excess == 0.0
+    }
+}
+
+/// What every candidate of a search is judged by: the objective and the guards.
+#[derive(Debug, Clone, Copy)]
+pub struct Judge {
+    /// What to minimise.
+    pub objective: Objective,
+    /// The allowed losses.
+    pub guards: Guards,
+    /// Softmax's accuracy and mAP on the same rows.
+    pub reference: Reference,
+}
+
+impl Judge {
+    /// The metrics a candidate's accumulator keeps: the objective's, the accuracy and
+    /// mAP of the guards, and with `all` every metric.
+    fn parts(&self, all: bool) -> Parts {
+        if all {
+            return Parts::ALL;
+        }
+        Parts {
+            calibration: true,
+            ranking: true,
+            ..self.objective.parts()
+        }
+    }
+
+    /// An empty accumulator for one candidate.
+    fn accumulator(&self, all: bool) -> Option<Accumulator> {
+        let cfg = MetricsConfig {
+            bins: ECE_BINS,
+            ..MetricsConfig::default()
+        };
+        Accumulator::new(&cfg, self.parts(all)).ok()
+    }
+
+    /// The candidate `(bins, lambda)` whose rows went into `acc` (`None`: none could).
+    fn candidate(&self, acc: Option<&Accumulator>, bins: usize, lambda: f32) -> Candidate {
+        let Some(acc) = acc else {
+            return Candidate {
+                bins,
+                lambda,
+                objective: f64::INFINITY,
+                excess: f64::INFINITY,
+                ece: None,
+                nll: None,
+                brier: None,
+                accuracy: None,
+                mean_ap: None,
+            };
+        };
+        let (ece, nll, brier) = (acc.ece(), acc.nll(), acc.brier());
+        let value = match self.objective {
+            Objective::Ece => ece,
+            Objective::Nll => nll,
+            Objective::Brier => brier,
+        };
+        let (accuracy, mean_ap) = (acc.accuracy(), acc.mean_ap());
+        Candidate {
+            bins,
+            lambda,
+            objective: value.unwrap_or(f64::INFINITY),
+            excess: self.guards.excess(accuracy, mean_ap, &self.reference),
+            ece,
+            nll,
+            brier,
+            accuracy,
+            mean_ap,
+        }
+    }
+}
+
+/// The order of candidates: eligible first, then the smaller excess, the objective,
+/// fewer bins and the smaller lambda.
+fn order(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
+    a.excess
+        .total_cmp(&b.excess)
+        .then(a.objective.total_cmp(&b.objective))
+        .then(a.bins.cmp(&b.bins))
+        .then(a.lambda.total_cmp(&b.lambda))
+}
+
+/// Runs `f` on every item of `work`, the items shared among the machine's cores;
+/// `None` when a thread failed.
+fn parallel<T: Sync, R: Send>(work: &[T], f: impl Fn(&T) -> R + Sync) -> Option<Vec<R>> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .clamp(1, work.len().max(1));
+    let chunk = work.len().div_ceil(threads).max(1);
+    let f = &f;
+    let parts: Vec<Option<Vec<R>>> = std::thread::scope(|s| {
+        let handles: Vec<_> = work
+            .chunks(chunk)
+            .map(|part| s.spawn(move || part.iter().map(f).collect::<Vec<R>>()))
+            .collect();
+        handles.into_iter().map(|h| h.join().ok()).collect()
+    });
+    let mut out = Vec::with_capacity(work.len());
+    for p in parts {
+        out.extend(p?);
+    }
+    Some(out)
 }
 
 /// Why a search could not run.
@@ -151,16 +373,29 @@ pub fn parse_bins(spec: &str) -> Result<Vec<usize>, String> {
 }
 
 /// A log-spaced grid from `min` to `max` inclusive with `per_decade` points per decade,
-/// rounded to `f32` (the precision the table stores).
+/// rounded to `f32` (the precision the table stores), for the ML and MAP heads.
 ///
 /// # Errors
 ///
 /// When the bounds are not `0 < min <= max <= MAX_LAMBDA` or `per_decade` is 0.
 pub fn lambda_grid(min: f64, max: f64, per_decade: usize) -> Result<Vec<f32>, String> {
-    if !(min > 0.0 && min <= max && max <= f64::from(crate::MAX_LAMBDA)) || per_decade == 0 {
+    log_grid(min, max, per_decade, crate::MAX_LAMBDA)
+}
+
+/// [`lambda_grid`] for the Bayes head, whose lambda is at most
+/// [`MAX_LAMBDA_BAYES`](crate::MAX_LAMBDA_BAYES) (1).
+///
+/// # Errors
+///
+/// When the bounds are not `0 < min <= max <= 1` or `per_decade` is 0.
+pub fn bayes_lambda_grid(min: f64, max: f64, per_decade: usize) -> Result<Vec<f32>, String> {
+    log_grid(min, max, per_decade, crate::MAX_LAMBDA_BAYES)
+}
+
+fn log_grid(min: f64, max: f64, per_decade: usize, limit: f32) -> Result<Vec<f32>, String> {
+    if !(min > 0.0 && min <= max && max <= f64::from(limit)) || per_decade == 0 {
         return Err(format!(
-            "lambda grid needs 0 < min <= max <= {} and at least one point per decade",
-            crate::MAX_LAMBDA
+            "lambda grid needs 0 < min <= max <= {limit} and at least one point per decade"
         ));
     }
     let decades = (max / min).log10();
@@ -210,60 +445,33 @@ fn evidence_into(
     }
 }
 
-/// Scores one lambda over every row given the evidence: the objective alone, or all
-/// metrics (`ece`, `nll`, `brier`, `accuracy`) with `all`.
+/// Scores one lambda over every row given the evidence: the objective and the guards'
+/// metrics, or every metric with `all`.
 fn score(
     val: &ValRows<'_>,
     evidence: &[f32],
     bins: usize,
     lambda: f32,
-    objective: Objective,
+    judge: &Judge,
     all: bool,
 ) -> Candidate {
     let k = val.k;
     let mut scores = vec![0.0f32; k];
     let mut scratch = vec![0.0f32; k];
-    let cfg = MetricsConfig {
-        bins: ECE_BINS,
-        ..MetricsConfig::default()
-    };
-    let parts = if all { Parts::ALL } else { objective.parts() };
-    let Ok(mut acc) = Accumulator::new(&cfg, parts) else {
-        return Candidate {
-            bins,
-            lambda,
-            objective: f64::INFINITY,
-            ece: None,
-            nll: None,
-            brier: None,
-            accuracy: None,
-        };
-    };
-    let rows = evidence
-        .chunks_exact(k)
-        .zip(val.logits.chunks_exact(k))
-        .zip(val.objectness)
-        .zip(val.labels);
-    for (((e, x), &os), &label) in rows {
-        if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
-            acc.add(&scores, x, label);
+    let mut acc = judge.accumulator(all);
+    if let Some(acc) = &mut acc {
+        let rows = evidence
+            .chunks_exact(k)
+            .zip(val.logits.chunks_exact(k))
+            .zip(val.objectness)
+            .zip(val.labels);
+        for (((e, x), &os), &label) in rows {
+            if scores_from_evidence(e, lambda, os, &mut scores, &mut scratch).is_ok() {
+                acc.add(&scores, x, label);
+            }
         }
     }
-    let (ece, nll, brier) = (acc.ece(), acc.nll(), acc.brier());
-    let value = match objective {
-        Objective::Ece => ece,
-        Objective::Nll => nll,
-        Objective::Brier => brier,
-    };
-    Candidate {
-        bins,
-        lambda,
-        objective: value.unwrap_or(f64::INFINITY),
-        ece,
-        nll,
-        brier,
-        accuracy: acc.accuracy(),
-    }
+    judge.candidate(acc.as_ref(), bins, lambda)
 }
 
 /// The candidates of one head, best first.
@@ -303,7 +511,7 @@ impl TuneResult {
 /// | `tail` | the likelihood above the last edge |
 /// | `bins` | the bin counts to try, per head (each head is searched on its own) |
 /// | `lambdas` | the smoothing values to try (every head) |
-/// | `objective` | what to minimise |
+/// | `judge` | what to minimise, and the guards against softmax |
 /// | `detail` | how many of the best candidates per head get every metric |
 #[derive(Debug, Clone, Copy)]
 pub struct SearchParams<'a> {
@@ -317,8 +525,8 @@ pub struct SearchParams<'a> {
     pub bins: &'a [(Head, Vec<usize>)],
     /// Lambdas to try.
     pub lambdas: &'a [f32],
-    /// What to minimise.
-    pub objective: Objective,
+    /// The objective and the guards.
+    pub judge: Judge,
     /// How many of the best candidates per head get every metric.
     pub detail: usize,
 }
@@ -336,8 +544,10 @@ impl SearchParams<'_> {
 /// Searches every head of `p.bins`.
 ///
 /// `histograms(b)` returns the K fitted histograms with `b` bins (called once per
-/// distinct bin count). Every candidate gets its objective; the best `p.detail` of
-/// each head also get every metric of [`Candidate`]. The bin counts are shared among the
+/// distinct bin count). Every candidate gets its objective, accuracy, mAP and excess
+/// over the guards, and candidates are ordered as the guards and the objective say
+/// (eligible first); the best `p.detail` of each head also get every metric of
+/// [`Candidate`]. The bin counts are shared among the
 /// machine's cores. `progress(done, total)` is called as bin counts complete.
 ///
 /// # Errors
@@ -395,7 +605,7 @@ where
                 if set.contains(b) {
                     evidence_into(val, hists, &pdf, p.tail, *head, &mut evidence);
                     for &l in p.lambdas {
-                        out.push(score(val, &evidence, *b, l, p.objective, false));
+                        out.push(score(val, &evidence, *b, l, &p.judge, false));
                     }
                 }
             }
@@ -425,13 +635,6 @@ where
             h.candidates.extend(found);
         }
     }
-    // Stable order: objective, then fewer bins, then smaller lambda.
-    let order = |a: &Candidate, b: &Candidate| {
-        a.objective
-            .total_cmp(&b.objective)
-            .then(a.bins.cmp(&b.bins))
-            .then(a.lambda.total_cmp(&b.lambda))
-    };
     let mut evidence = vec![0.0f32; n * k];
     for (h, (_, set)) in heads.iter_mut().zip(p.bins) {
         if h.candidates.len() != set.len() * p.lambdas.len() {
@@ -442,7 +645,7 @@ where
         for c in h.candidates.iter_mut().take(p.detail) {
             if let Some((_, hists)) = work.iter().find(|(b, _)| *b == c.bins) {
                 evidence_into(val, hists, &pdf, p.tail, h.head, &mut evidence);
-                *c = score(val, &evidence, c.bins, c.lambda, p.objective, true);
+                *c = score(val, &evidence, c.bins, c.lambda, &p.judge, true);
             }
         }
     }
@@ -452,6 +655,40 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn guards_order_candidates() {
+        let g = Guards::default();
+        let r = Reference {
+            accuracy: Some(0.9),
+            mean_ap: None,
+        };
+        // No reference mAP: no guard on it; an undefined accuracy loses everything.
+        assert_eq!(g.excess(Some(0.895), None, &r), 0.0);
+        assert_eq!(g.excess(None, Some(0.5), &r), f64::INFINITY);
+        assert!((g.excess(Some(0.85), None, &r) - 0.045).abs() < 1e-12);
+        assert!(Guards {
+            max_accuracy_loss: -1.0,
+            ..g
+        }
+        .validate()
+        .is_err());
+        let c = |excess: f64, objective: f64| Candidate {
+            bins: 4,
+            lambda: 1.0,
+            objective,
+            excess,
+            ece: None,
+            nll: None,
+            brier: None,
+            accuracy: None,
+            mean_ap: None,
+        };
+        let mut v = [c(0.01, 0.1), c(0.0, 0.3), c(0.002, 0.5), c(0.0, 0.2)];
+        v.sort_by(order);
+        let got: Vec<(f64, f64)> = v.iter().map(|c| (c.excess, c.objective)).collect();
+        assert_eq!(got, [(0.0, 0.2), (0.0, 0.3), (0.002, 0.5), (0.01, 0.1)]);
+    }
 
     #[test]
     fn bin_sets() {
@@ -474,5 +711,9 @@ mod tests {
         }
         assert!(lambda_grid(0.0, 1.0, 3).is_err());
         assert!(lambda_grid(1.0, 0.1, 3).is_err());
+        // The Bayes head's lambda is at most 1.
+        assert_eq!(bayes_lambda_grid(0.1, 1.0, 1).unwrap(), [0.1f32, 1.0]);
+        assert!(bayes_lambda_grid(0.1, 2.0, 1).is_err());
+        assert!(lambda_grid(0.1, 2.0, 1).is_ok());
     }
 }

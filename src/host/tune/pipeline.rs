@@ -1,15 +1,31 @@
-//! `tune` as a whole: from a training set and a validation file to the table of the
-//! best candidates.
+//! `tune` as a whole: from a training set, a validation file (and never-seen objects)
+//! to the table of the chosen candidates and the comparison of every head with the
+//! baselines on the validation rows.
 
 use std::path::Path;
 use std::prelude::rust_2021::*;
 
-use super::{search, Objective, SearchParams, TuneError, TuneResult, ValRows};
+use super::{
+    search, search_bayes, BayesSearchParams, Candidate, Guards, Judge, Objective, Reference,
+    SearchParams, TuneError, TuneResult, ValRows,
+};
+use crate::host::baselines::{self, Baseline, Rows};
 use crate::host::data::{check_classes, Loaded};
 use crate::host::error::HostError;
+use crate::host::eval::{head_scores, Method};
 use crate::host::fit::{build_table, FitError, TrainingSet};
+use crate::host::metrics::{self, Metrics, MetricsConfig};
 use crate::host::DynTable;
 use crate::{EdgeMode, Gaussian, Head, Histogram, Settings, UpperTail};
+
+/// The grid of the Bayes head.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BayesGrid {
+    /// Bin counts per logit to try.
+    pub bins: Vec<usize>,
+    /// Lambdas to try, each in `(0, 1]`.
+    pub lambdas: Vec<f32>,
+}
 
 /// The grid and policies of [`tune`].
 ///
@@ -18,18 +34,24 @@ use crate::{EdgeMode, Gaussian, Head, Histogram, Settings, UpperTail};
 /// | Name | Purpose |
 /// |---|---|
 /// | `bins` | bin counts to try per head; the table needs a candidate of `ML` and `MAP` |
-/// | `lambdas` | smoothing values to try (e.g. from [`lambda_grid`](super::lambda_grid)) |
+/// | `lambdas` | smoothing values to try for ML and MAP (e.g. from [`lambda_grid`](super::lambda_grid)) |
+/// | `bayes` | the Bayes head's grid; `None` leaves the head out of the table |
 /// | `objective` | what to minimise on the validation set |
+/// | `guards` | how much accuracy and mAP a chosen candidate may lose against softmax |
 /// | `edges`, `tail` | the fit's edge placement and tail policy |
 /// | `detail` | how many of the best candidates per head get every metric |
 #[derive(Debug, Clone, PartialEq)]
 pub struct TuneParams {
-    /// Bin counts to try, per head.
+    /// Bin counts to try, per head (ML and MAP).
     pub bins: Vec<(Head, Vec<usize>)>,
-    /// Lambdas to try.
+    /// Lambdas to try (ML and MAP).
     pub lambdas: Vec<f32>,
+    /// The Bayes head's grid, or `None` for a table without that head.
+    pub bayes: Option<BayesGrid>,
     /// What to minimise.
     pub objective: Objective,
+    /// The allowed losses against softmax.
+    pub guards: Guards,
     /// Edge placement.
     pub edges: EdgeMode,
     /// Likelihood above the last edge.
@@ -41,6 +63,12 @@ pub struct TuneParams {
 impl TuneParams {
     /// Number of candidates searched for `head`.
     pub fn candidates(&self, head: Head) -> usize {
+        if head == Head::Bayes {
+            return self
+                .bayes
+                .as_ref()
+                .map_or(0, |g| g.bins.len() * g.lambdas.len());
+        }
         self.bins
             .iter()
             .find(|(h, _)| *h == head)
@@ -48,18 +76,99 @@ impl TuneParams {
     }
 }
 
-/// What [`tune`] found: every candidate, and the table of the best ones.
+/// One method in the comparison of [`tune`]: its metrics on the validation rows (with
+/// the never-seen objects as background rows, and their `ood_mean`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Compared {
+    /// The method.
+    pub method: Method,
+    /// The chosen candidate, for a head.
+    pub chosen: Option<Candidate>,
+    /// Every metric of DESIGN §1.5.
+    pub metrics: Metrics,
+    /// How much more accuracy or mAP than the guards allow it loses against softmax.
+    pub excess: f64,
+}
+
+/// Every head at its chosen settings, softmax and temperature scaling, on the rows the
+/// candidates were scored on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Comparison {
+    /// Validation rows.
+    pub rows: usize,
+    /// Never-seen rows among them.
+    pub ood_rows: Option<usize>,
+    /// The temperature fitted on the validation rows; `None` when it cannot be (no
+    /// row labelled with a class), and temperature scaling is then left out.
+    pub temperature: Option<f64>,
+    /// Softmax's accuracy and mAP, which the guards compare against.
+    pub reference: Reference,
+    /// The methods: softmax, temperature, then every head in the table.
+    pub methods: Vec<Compared>,
+    /// The head with the best objective among the heads within the guards; `None`
+    /// when no head is.
+    pub best: Option<Method>,
+}
+
+/// What [`tune`] found: every candidate, the table of the chosen ones, and the
+/// comparison of every head with the baselines.
 #[derive(Debug, Clone)]
 pub struct Tuned {
     /// Every candidate of each head, best first.
     pub result: TuneResult,
-    /// The table built from the best candidate of each head.
+    /// The table built from the chosen candidate of each head.
     pub table: DynTable,
+    /// The heads and the baselines on the validation rows.
+    pub comparison: Comparison,
 }
 
-/// Searches the grid of `params` on the validation rows `val` (read from `val_path`)
-/// and builds the table of the best candidates from `train`. `progress(done, total)`
-/// is called as bin counts complete.
+/// The rows candidates are scored on: the validation rows, then the never-seen ones
+/// as background.
+struct Scored {
+    logits: Vec<f64>,
+    objectness: Vec<f64>,
+    labels: Vec<Option<usize>>,
+}
+
+impl Scored {
+    fn new(val: &Loaded, labels: Vec<Option<usize>>, ood: Option<&Loaded>) -> Self {
+        let mut s = Self {
+            logits: val.logits.clone(),
+            objectness: val.objectness.clone(),
+            labels,
+        };
+        if let Some(o) = ood {
+            s.logits.extend_from_slice(&o.logits);
+            s.objectness.extend_from_slice(&o.objectness);
+            s.labels.extend(std::iter::repeat_n(None, o.len()));
+        }
+        s
+    }
+
+    /// The metrics of `scores` (`N x K`), with `ood_mean` of the never-seen rows.
+    fn metrics(
+        &self,
+        scores: &[f64],
+        k: usize,
+        val_rows: usize,
+        with_ood: bool,
+    ) -> Result<Metrics, String> {
+        let cfg = MetricsConfig::default();
+        let m = metrics::evaluate_with_logits(scores, &self.logits, k, &self.labels, &cfg)
+            .map_err(|e| e.to_string())?;
+        if !with_ood {
+            return Ok(m);
+        }
+        let ood = scores.get(val_rows * k..).unwrap_or(&[]);
+        Ok(m.with_ood(metrics::ood_metrics(ood, k).map_err(|e| e.to_string())?))
+    }
+}
+
+/// Searches the grid of `params` on the validation rows `val` (read from `val_path`),
+/// and the never-seen objects `ood` as background rows, builds the table of the chosen
+/// candidates from `train`, and compares every head at its chosen settings with
+/// softmax and temperature scaling on the same rows. `progress(done, total)` is called
+/// as bin counts complete.
 ///
 /// # Errors
 ///
@@ -70,6 +179,7 @@ pub fn tune(
     train: &TrainingSet,
     val: &Loaded,
     val_path: &Path,
+    ood: Option<(&Loaded, &Path)>,
     params: &TuneParams,
     progress: impl Fn(usize, usize) + Sync,
 ) -> Result<Tuned, HostError> {
@@ -83,8 +193,37 @@ pub fn tune(
              (choose --objective ece or brier)",
         ));
     }
-    let logits = val.logits_f32();
-    let objectness = val.objectness_f32();
+    params
+        .guards
+        .validate()
+        .map_err(|e| HostError::Input(format!("tune: {e}")))?;
+    if let Some((o, path)) = ood {
+        check_classes(path, &o.classes, names.iter().copied())?;
+    }
+    let k = names.len();
+    let rows = Scored::new(val, labels, ood.map(|(o, _)| o));
+    let fail = |e: String| HostError::input(val_path, e);
+    // Softmax on the same rows: the reference of the guards.
+    let softmax = score_baseline(Baseline::Softmax, &rows, k).map_err(&fail)?;
+    let softmax_m = rows
+        .metrics(&softmax, k, val.len(), ood.is_some())
+        .map_err(&fail)?;
+    let judge = Judge {
+        objective: params.objective,
+        guards: params.guards,
+        reference: Reference {
+            accuracy: softmax_m.accuracy,
+            mean_ap: softmax_m.mean_ap(),
+        },
+    };
+    let logits: Vec<f32> = rows.logits.iter().map(|&v| v as f32).collect();
+    let objectness: Vec<f32> = rows.objectness.iter().map(|&v| v as f32).collect();
+    let val_rows = ValRows {
+        k,
+        logits: &logits,
+        objectness: &objectness,
+        labels: &rows.labels,
+    };
     let priors = train
         .moments()
         .iter()
@@ -107,32 +246,32 @@ pub fn tune(
             .collect()
     };
     let search_params = SearchParams {
-        val: ValRows {
-            k: names.len(),
-            logits: &logits,
-            objectness: &objectness,
-            labels: &labels,
-        },
+        val: val_rows,
         priors: &priors,
         tail: params.tail,
         bins: &params.bins,
         lambdas: &params.lambdas,
-        objective: params.objective,
+        judge,
         detail: params.detail,
     };
-    let result = search(&search_params, histograms, progress).map_err(|e| match e {
+    let first = search_params.distinct_bins().len();
+    let bayes_bins = params.bayes.as_ref().map_or(0, |g| g.bins.len());
+    let total = first + bayes_bins;
+    let map_err = |e: TuneError| match e {
         TuneError::BadValidationSet(_) => HostError::input(val_path, e),
         TuneError::Histogram(_) => HostError::input(train.path(), e),
         TuneError::EmptyGrid => HostError::Input(format!("tune: {e}")),
-    })?;
-    let best = |head: Head| {
+    };
+    let mut result =
+        search(&search_params, histograms, |d, _| progress(d, total)).map_err(map_err)?;
+    let best = |result: &TuneResult, head: Head| {
         result
             .candidates(head)
             .first()
             .copied()
             .ok_or_else(|| HostError::Input("tune: the search grid is empty".into()))
     };
-    let (best_ml, best_map) = (best(Head::Ml)?, best(Head::Map)?);
+    let (best_ml, best_map) = (best(&result, Head::Ml)?, best(&result, Head::Map)?);
     let fit = |e| HostError::fit(train.path(), e);
     let ml = train.histograms(best_ml.bins, params.edges).map_err(fit)?;
     let map = train.histograms(best_map.bins, params.edges).map_err(fit)?;
@@ -142,12 +281,111 @@ pub fn tune(
         edge_mode: params.edges,
         upper_tail: params.tail,
     };
-    let table = build_table(train.moments(), &ml, &map, settings).map_err(fit)?;
-    // The Bayes head with its fit defaults (not searched yet).
-    let bayes = crate::host::fit::BayesParams::default();
-    let table = train
-        .bayes_counts(bayes.bins)
-        .and_then(|counts| crate::host::fit::with_bayes(table, &counts, bayes.lambda))
-        .map_err(fit)?;
-    Ok(Tuned { result, table })
+    let mut table = build_table(train.moments(), &ml, &map, settings).map_err(fit)?;
+    if let Some(grid) = &params.bayes {
+        let bayes_params = BayesSearchParams {
+            val: val_rows,
+            base: &table,
+            bins: &grid.bins,
+            lambdas: &grid.lambdas,
+            judge,
+            detail: params.detail,
+        };
+        let counts = |b: usize| train.bayes_counts(b).map_err(|e| e.to_string());
+        let found = search_bayes(&bayes_params, counts, |d, _| progress(first + d, total))
+            .map_err(map_err)?;
+        result.heads.push(found);
+        let chosen = best(&result, Head::Bayes)?;
+        let counts = train.bayes_counts(chosen.bins).map_err(fit)?;
+        table = crate::host::fit::with_bayes(table, &counts, chosen.lambda).map_err(fit)?;
+    }
+    let comparison = compare(
+        &table, &result, &rows, val, val_path, ood, softmax, softmax_m, judge,
+    )?;
+    Ok(Tuned {
+        result,
+        table,
+        comparison,
+    })
+}
+
+/// The scores of a baseline on every row.
+fn score_baseline(b: Baseline, rows: &Scored, k: usize) -> Result<Vec<f64>, String> {
+    let r = Rows::new(&rows.logits, k, &[], &rows.objectness).map_err(|e| e.to_string())?;
+    baselines::score_rows(b, &r).map_err(|e| e.to_string())
+}
+
+/// Softmax, temperature scaling (`T` fitted on the validation rows) and every head of
+/// `table` on `rows`; names the best head within the guards.
+#[allow(clippy::too_many_arguments)]
+fn compare(
+    table: &DynTable,
+    result: &TuneResult,
+    rows: &Scored,
+    val: &Loaded,
+    val_path: &Path,
+    ood: Option<(&Loaded, &Path)>,
+    softmax: Vec<f64>,
+    softmax_m: Metrics,
+    judge: Judge,
+) -> Result<Comparison, HostError> {
+    let k = table.k();
+    let fail = |e: String| HostError::input(val_path, e);
+    let n_val = val.len();
+    let val_labels = rows.labels.get(..n_val).unwrap_or(&[]);
+    let fit_rows = Rows::new(&val.logits, k, val_labels, &val.objectness)
+        .map_err(|e| HostError::input(val_path, e))?;
+    let t = baselines::fit_temperature_detailed(&fit_rows)
+        .ok()
+        .map(|f| f.t);
+    let with_ood = ood.is_some();
+    let mut methods = vec![(Method::Softmax, softmax, Some(softmax_m))];
+    if let Some(t) = t {
+        let temperature = score_baseline(Baseline::Temperature(t), rows, k).map_err(&fail)?;
+        methods.push((Method::Temperature, temperature, None));
+    }
+    for method in [Method::Ml, Method::Map, Method::Bayes] {
+        let Some(head) = method.head() else { continue };
+        if head == Head::Bayes && table.bayes().is_none() {
+            continue;
+        }
+        let mut scores = head_scores(table, head, val, val_path)?;
+        if let Some((o, path)) = ood {
+            scores.extend(head_scores(table, head, o, path)?);
+        }
+        methods.push((method, scores, None));
+    }
+    let mut out = Vec::with_capacity(methods.len());
+    for (method, scores, known) in methods {
+        let metrics = match known {
+            Some(m) => m,
+            None => rows.metrics(&scores, k, n_val, with_ood).map_err(&fail)?,
+        };
+        let chosen = method
+            .head()
+            .and_then(|h| result.candidates(h).first().copied());
+        let excess = judge
+            .guards
+            .excess(metrics.accuracy, metrics.mean_ap(), &judge.reference);
+        out.push(Compared {
+            method,
+            chosen,
+            metrics,
+            excess,
+        });
+    }
+    let best = out
+        .iter()
+        .filter(|c| c.method.head().is_some() && c.excess == 0.0)
+        .filter_map(|c| judge.objective.of(&c.metrics).map(|v| (c.method, v)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(m, _)| m);
+    Ok(Comparison {
+        rows: rows.labels.len(),
+        ood_rows: ood.map(|(o, _)| o.len()),
+        temperature: t,
+        reference: judge.reference,
+        methods: out,
+        best,
+    })
 }

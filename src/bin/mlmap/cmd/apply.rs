@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use mlmap::host::data::{self, at, check_classes};
 use mlmap::host::dataset::Label;
 use mlmap::host::metrics::decision;
-use mlmap::Libm;
+use mlmap::{FastMath, Libm};
 
 use crate::args::ApplyArgs;
 use crate::error::{CliError, Result};
@@ -19,6 +19,9 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
     check_classes(&args.input, src.classes(), table.class_names())?;
     let names: Vec<&str> = table.class_names().collect();
     let k = names.len();
+    // The Bayes head's columns only when the table has it; its scratch holds one
+    // float per category.
+    let bayes_cats = table.bayes().map(|b| b.categories());
     let out_path = &args.output;
     let csv_err = |e: csv::Error| CliError::internal(out_path, format!("cannot write: {e}"));
     output::write_atomic(out_path, |w| {
@@ -32,13 +35,21 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
         }
         header.extend(names.iter().map(|n| format!("ml_{n}")));
         header.extend(names.iter().map(|n| format!("map_{n}")));
+        if bayes_cats.is_some() {
+            header.extend(names.iter().map(|n| format!("bayes_{n}")));
+        }
         header.push("ml_pred".into());
         header.push("map_pred".into());
+        if bayes_cats.is_some() {
+            header.push("bayes_pred".into());
+        }
         csv.write_record(&header).map_err(csv_err)?;
         let mut x = vec![0.0f32; k];
         let mut ml = vec![0.0f32; k];
         let mut map = vec![0.0f32; k];
         let mut scratch = vec![0.0f32; k];
+        let mut bayes = vec![0.0f32; if bayes_cats.is_some() { k } else { 0 }];
+        let mut bayes_scratch = vec![0.0f32; bayes_cats.unwrap_or(0)];
         // Fields are written one by one, numbers through one reused buffer: no
         // allocation per row.
         let mut number = String::new();
@@ -54,6 +65,12 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
             table
                 .map_into::<Libm>(&x, os, &mut map, &mut scratch)
                 .map_err(at)?;
+            if bayes_cats.is_some() {
+                // The device's default backend for this head (`Table::bayes`).
+                table
+                    .bayes_into::<FastMath>(&x, os, &mut bayes, &mut bayes_scratch)
+                    .map_err(at)?;
+            }
             if src.has_ids() {
                 csv.write_field(row.id.unwrap_or("")).map_err(csv_err)?;
             }
@@ -65,12 +82,17 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
                 };
                 csv.write_field(label).map_err(csv_err)?;
             }
-            for v in ml.iter().chain(&map) {
+            for v in ml.iter().chain(&map).chain(&bayes) {
                 number.clear();
                 let _ = write!(number, "{v}");
                 csv.write_field(&number).map_err(csv_err)?;
             }
-            for scores in [&ml, &map] {
+            let heads: &[&Vec<f32>] = if bayes_cats.is_some() {
+                &[&ml, &map, &bayes]
+            } else {
+                &[&ml, &map]
+            };
+            for scores in heads {
                 let pred = names.get(decision(scores, &x)).copied().unwrap_or("");
                 csv.write_field(pred).map_err(csv_err)?;
             }

@@ -1,11 +1,14 @@
 //! `mlmap demo`: the whole job on the data shipped in `examples/data/`.
 //!
 //! 1. fit a table with the authors' detection settings (22 / 17 bins);
-//! 2. tune both lambdas on the validation set, keeping the firmware's shape 22 / 17;
-//! 3. evaluate sigmoid, softmax, temperature, ML and MAP on the test set and on the
-//!    never-seen objects;
+//! 2. tune the lambdas of the three heads on the validation set, keeping the firmware's
+//!    shape 22 / 17 / 22;
+//! 3. evaluate sigmoid, softmax, temperature, ML, MAP and Bayes on the test set and on
+//!    the never-seen objects;
 //! 4. decode the written table with the no_std layer (`Table<3, 22, 17, 22, 4>`) and check
-//!    that it scores every test row bit for bit like the host.
+//!    that it scores every test row bit for bit like the host, every head;
+//! 5. name the head to ship: the best ECE on test + never-seen objects among the heads
+//!    within the accuracy and mAP guards against softmax.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -14,7 +17,7 @@ use mlmap::host::data::{self, Loaded};
 use mlmap::host::eval::{self, head_scores, Inputs};
 use mlmap::host::fit::{FitParams, TrainingSet};
 use mlmap::host::metrics::MetricsConfig;
-use mlmap::host::tune::{self, Objective, TuneParams};
+use mlmap::host::tune::{self, BayesGrid, Guards, Objective, TuneParams};
 use mlmap::host::DynTable;
 use mlmap::{EdgeMode, Head, Table, UpperTail};
 
@@ -39,25 +42,35 @@ fn device_check(
         .map_err(|e| CliError::Internal(format!("the no_std layer refused the table: {e}")))?;
     let ml_host = head_scores(host, Head::Ml, data, path)?;
     let map_host = head_scores(host, Head::Map, data, path)?;
+    let bayes_host = head_scores(host, Head::Bayes, data, path)?;
     let mut differ = 0;
     let rows = data.logits.chunks_exact(3).zip(&data.objectness);
-    let host_rows = ml_host.chunks_exact(3).zip(map_host.chunks_exact(3));
-    for ((x, &os), (ml_h, map_h)) in rows.zip(host_rows) {
+    let host_rows = ml_host
+        .chunks_exact(3)
+        .zip(map_host.chunks_exact(3))
+        .zip(bayes_host.chunks_exact(3));
+    for ((x, &os), ((ml_h, map_h), bayes_h)) in rows.zip(host_rows) {
         let mut xs = [0f32; 3];
         for (d, &v) in xs.iter_mut().zip(x) {
             *d = v as f32;
         }
         let x = xs;
-        let (ml, map) = match (device.ml(&x, os as f32), device.map(&x, os as f32)) {
-            (Ok(a), Ok(b)) => (a, b),
-            (Err(e), _) | (_, Err(e)) => return Err(CliError::input(path, e)),
+        let (ml, map, bayes) = match (
+            device.ml(&x, os as f32),
+            device.map(&x, os as f32),
+            device.bayes(&x, os as f32),
+        ) {
+            (Ok(a), Ok(b), Ok(c)) => (a, b, c),
+            (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
+                return Err(CliError::input(path, e))
+            }
         };
         let same = |d: &[f32; 3], h: &[f64]| {
             d.iter()
                 .zip(h)
                 .all(|(a, &b)| a.to_bits() == (b as f32).to_bits())
         };
-        if !same(&ml.0, ml_h) || !same(&map.0, map_h) {
+        if !same(&ml.0, ml_h) || !same(&map.0, map_h) || !same(&bayes.0, bayes_h) {
             differ += 1;
         }
     }
@@ -95,10 +108,18 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     let _ = writeln!(log, "1. fit (authors' detection settings)");
     log.push_str(&table_summary(&fitted_path, &fitted, size));
 
-    // 2. Tune both lambdas on the validation set at the firmware's shape.
+    // 2. Tune the lambdas on the validation set at the firmware's shape. The
+    //    never-seen objects stay out of it: they are for the evaluation.
+    let lambdas = tune::lambda_grid(1e-8, 1e-1, 4).map_err(CliError::Input)?;
+    let guards = Guards::default();
     let params = TuneParams {
         bins: vec![(Head::Ml, vec![22]), (Head::Map, vec![17])],
-        lambdas: tune::lambda_grid(1e-8, 1e-1, 4).map_err(CliError::Input)?,
+        bayes: Some(BayesGrid {
+            bins: vec![22],
+            lambdas: lambdas.clone(),
+        }),
+        lambdas,
+        guards,
         objective: Objective::Ece,
         edges: EdgeMode::Linspace,
         tail: UpperTail::Zero,
@@ -107,19 +128,22 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     let tune::Tuned {
         result,
         table: tuned,
-    } = tune::tune(&train, &val, &val_p, &params, |_, _| {})?;
+        comparison,
+    } = tune::tune(&train, &val, &val_p, None, &params, |_, _| {})?;
     let tuned_path = a.output.join("tuned.mlmap");
     let size = write_table(&tuned_path, &tuned)?;
-    let tune_text = report::candidates(&result, params.objective, 5, |h| params.candidates(h));
+    let mut tune_text = report::candidates(&result, params.objective, 5, |h| params.candidates(h));
+    tune_text.push('\n');
+    tune_text.push_str(&report::comparison(&comparison, params.objective));
     output::write_bytes_atomic(&a.output.join("tune.txt"), tune_text.as_bytes())?;
     let _ = writeln!(
         log,
-        "\n2. tune lambdas on {} (ECE, bins kept at 22 / 17)",
+        "\n2. tune lambdas on {} (ECE, bins kept at 22 / 17 / 22)",
         val_p.display()
     );
     log.push_str(&table_summary(&tuned_path, &tuned, size));
 
-    // 3. Evaluate the five methods.
+    // 3. Evaluate the six methods.
     let config = MetricsConfig::default();
     let ev = eval::evaluate(&Inputs {
         table: &tuned,
@@ -181,6 +205,25 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         "ood_over_0_9",
         &pct,
     ));
+    let best = ev.best_head(params.objective, &guards)?;
+    let _ = match best {
+        Some((method, m)) => writeln!(
+            log,
+            "  head to ship: {} has the best ECE on test + never-seen objects ({}) among the heads within {:.1} points of softmax's accuracy and {:.1} of its mAP (accuracy {}, mAP {})",
+            method.title(),
+            num(Some(m.ece)),
+            100.0 * guards.max_accuracy_loss,
+            100.0 * guards.max_map_loss,
+            pct(m.accuracy),
+            num(m.mean_ap()),
+        ),
+        None => writeln!(
+            log,
+            "  head to ship: none of the heads keeps within {:.1} points of softmax's accuracy and {:.1} of its mAP on test + never-seen objects",
+            100.0 * guards.max_accuracy_loss,
+            100.0 * guards.max_map_loss,
+        ),
+    };
     let _ = writeln!(
         log,
         "  wrote fitted.mlmap, tuned.mlmap, tune.txt, eval.txt, eval.json, eval.md and {n_plots} plots into {}",
