@@ -29,14 +29,20 @@ expect_failure "a corrupted table" "$tmp/corrupt.mlmap" "checksum"
 python3 - "$tmp/lambda.mlmap" <<'PY'
 import struct, sys, zlib
 b = bytearray(open("tables/default.mlmap", "rb").read()[:-4])
-# magic(4) version(1) K(1) B_ML(1) B_MAP(1) edge(1) tail(1) -> lambda ML at offset 10
-b[10:14] = struct.pack("<f", -0.5)
+# magic(4) version(1) K(1) B_ML(1) B_MAP(1), version 2: B_BAYES(1) C(1),
+# then edge(1) tail(1) -> lambda ML at offset 10 (version 1) or 12 (version 2)
+at = 10 if b[4] == 1 else 12
+b[at:at + 4] = struct.pack("<f", -0.5)
 b += struct.pack("<I", zlib.crc32(bytes(b)) & 0xFFFFFFFF)
 open(sys.argv[1], "wb").write(b)
 PY
 expect_failure "a negative lambda" "$tmp/lambda.mlmap" "lambda"
 
 expect_failure "a missing file" "$tmp/none.mlmap" "No such file"
+
+# A valid version-1 table (no Bayes head) other than the default embeds.
+MLMAP_TABLE=tests/golden/train_linspace.mlmap cargo check --lib --quiet
+echo "ok: a version-1 table embeds"
 
 # Back to the default table (also re-runs build.rs for the steps that follow).
 cargo check --lib --quiet
