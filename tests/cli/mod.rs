@@ -48,6 +48,11 @@ mod bad_input;
 /// version.
 mod usage;
 
+/// Outputs that must not destroy anything: an output naming an input is refused;
+/// devices and FIFOs are written directly; fit's warnings.
+#[cfg(unix)]
+mod outputs;
+
 // ---------------------------------------------------------------------------------------
 // Running the binary
 // ---------------------------------------------------------------------------------------
