@@ -8,7 +8,7 @@
 //!   [`EdgeMode::Linspace`] (`[min, max]`) or [`EdgeMode::Matlab`] (MATLAB's bin
 //!   picker, below); see [`ClassMoments::range`];
 //! * the **prior**: the mean and the sample variance (`ddof = 1`) of `v_c`, the
-//!   variance floored to [`VARIANCE_FLOOR`].
+//!   variance floored to [`VARIANCE_FLOOR`](crate::VARIANCE_FLOOR).
 //!
 //! The moments are accumulated in `f64`. The histogram counts use the values rounded
 //! to `f32` and the table's own `f32` edges and bin rule
