@@ -1773,7 +1773,10 @@ mod tests {
             ),
         ] {
             let msg = v.to_string();
-            assert!(msg.starts_with("DESIGN §1.6: ") && msg.contains(needle), "{msg}");
+            assert!(
+                msg.starts_with("DESIGN §1.6: ") && msg.contains(needle),
+                "{msg}"
+            );
         }
     }
 
@@ -1870,7 +1873,13 @@ mod tests {
             let mut off = out;
             off[1] *= 1.01;
             assert_eq!(bayes_mismatch(&head, &off, &reference, 0.8), Some(1));
-            assert!(!bayes_reference(&head, &x[..1], 0.8, &mut reference, &mut s64));
+            assert!(!bayes_reference(
+                &head,
+                &x[..1],
+                0.8,
+                &mut reference,
+                &mut s64
+            ));
             // The tolerance: K = 2, lambda = 0.5, |ln(1/8)| = 2.08 with background.
             let tol = bayes_score_tolerance(&head);
             assert!(tol > 1e-5 && tol < 1e-4, "{tol:e}");
