@@ -882,10 +882,8 @@ impl<const K: usize, const BB: usize, const C: usize> ArbBayes<K, BB, C> {
                 .ranges
                 .iter()
                 .map(|(lo, span)| {
-                    let span = match span.positive() {
-                        0.0 => 1.0,
-                        s => s,
-                    };
+                    let span = span.positive();
+                    let span = if span == 0.0 { 1.0 } else { span };
                     (lo.get(), lo.get() + span)
                 })
                 .collect(),
