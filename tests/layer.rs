@@ -843,6 +843,31 @@ mod bayes {
         assert!(distinct.len() > 5_000, "{}", distinct.len());
     }
 
+    /// Every row of the test split against the formula in `f64` from the stored terms:
+    /// within the stated tolerance (and the measured error is reported).
+    #[test]
+    fn test_split_follows_the_formula_within_the_stated_tolerance() {
+        use mlmap::invariants::{bayes_reference, bayes_score_tolerance, check_scores, Sum};
+        let t = shipped();
+        let head = t.bayes_head().unwrap();
+        let tolerance = bayes_score_tolerance(&head);
+        let (xs, os) = test_rows();
+        let (mut want, mut scratch) = ([0.0f64; 3], [0.0f64; 4]);
+        let mut worst = 0.0f64;
+        for (x, &o) in xs.iter().zip(&os) {
+            let s = t.bayes(x, o).unwrap().0;
+            check_scores(&s, o, Sum::AtMost).unwrap();
+            assert!(bayes_reference(&head, x, o, &mut want, &mut scratch));
+            for (&v, &w) in s.iter().zip(&want) {
+                if w > 1e-30 {
+                    worst = worst.max((f64::from(v) - w).abs() / w);
+                }
+            }
+        }
+        eprintln!("Bayes, test split: worst relative error {worst:e}, tolerance {tolerance:e}");
+        assert!(worst <= tolerance, "{worst:e} > {tolerance:e}");
+    }
+
     #[test]
     fn bayes_batch_reports_the_first_bad_row() {
         let t = shipped();
