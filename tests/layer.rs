@@ -1060,3 +1060,119 @@ fn negligible_likelihood_never_lowers_the_score() {
     let n = run::<2>() + run::<3>() + run::<5>() + run::<6>() + run::<7>() + run::<8>();
     assert_eq!(n, 400 * 2 * (2 + 3 + 5 + 6 + 7 + 8));
 }
+
+/// The Bayes head (DESIGN §1.6) on the shipped table: the fixed-size table and the
+/// run-time shaped one compute the same bits for every row of `examples/data/test.csv`,
+/// as does the batch API; and the batch reports the first bad row like the others.
+#[cfg(feature = "std")]
+mod bayes {
+    use mlmap::host::DynTable;
+    use mlmap::FastMath;
+
+    use super::*;
+    use crate::support::SHIPPED_MLMAP;
+
+    /// The logits and objectness of every row of the shipped test split.
+    fn test_rows() -> (Vec<[f32; 3]>, Vec<f32>) {
+        let csv = include_str!("../examples/data/test.csv");
+        let mut lines = csv.lines();
+        assert_eq!(
+            lines.next(),
+            Some("id,label,objectness,car,cyclist,pedestrian")
+        );
+        let (mut xs, mut os) = (Vec::new(), Vec::new());
+        for line in lines {
+            let f: Vec<&str> = line.split(',').collect();
+            let num = |i: usize| f[i].parse::<f32>().unwrap();
+            os.push(num(2));
+            xs.push([num(3), num(4), num(5)]);
+        }
+        (xs, os)
+    }
+
+    #[test]
+    fn table_dyn_table_and_batch_agree_bit_for_bit_on_the_test_split() {
+        let t = shipped();
+        let d = DynTable::from_bytes(SHIPPED_MLMAP).unwrap();
+        let (xs, os) = test_rows();
+        assert_eq!(xs.len(), 10_000);
+        let mut batch = vec![[0.0f32; 3]; xs.len()];
+        t.bayes_batch(&xs, Some(&os), &mut batch).unwrap();
+        let (mut out, mut scratch) = ([0.0f32; 3], [0.0f32; 4]);
+        let mut distinct = std::collections::HashSet::new();
+        for ((x, &o), row) in xs.iter().zip(&os).zip(&batch) {
+            let s = t.bayes(x, o).unwrap().0;
+            d.bayes_into::<FastMath>(x, o, &mut out, &mut scratch)
+                .unwrap();
+            assert_eq!(out.map(f32::to_bits), s.map(f32::to_bits), "{x:?} {o}");
+            assert_eq!(row.map(f32::to_bits), s.map(f32::to_bits), "{x:?} {o}");
+            distinct.insert(s.map(f32::to_bits));
+        }
+        // Not a degenerate comparison: the rows get many different scores.
+        assert!(distinct.len() > 5_000, "{}", distinct.len());
+    }
+
+    /// Every row of the test split against the formula in `f64` from the stored terms:
+    /// within the stated tolerance (and the measured error is reported).
+    #[test]
+    fn test_split_follows_the_formula_within_the_stated_tolerance() {
+        use mlmap::invariants::{bayes_reference, bayes_score_tolerance, check_scores, Sum};
+        let t = shipped();
+        let head = t.bayes_head().unwrap();
+        let tolerance = bayes_score_tolerance(&head);
+        let (xs, os) = test_rows();
+        let (mut want, mut scratch) = ([0.0f64; 3], [0.0f64; 4]);
+        let mut worst = 0.0f64;
+        for (x, &o) in xs.iter().zip(&os) {
+            let s = t.bayes(x, o).unwrap().0;
+            check_scores(&s, o, Sum::AtMost).unwrap();
+            assert!(bayes_reference(&head, x, o, &mut want, &mut scratch));
+            for (&v, &w) in s.iter().zip(&want) {
+                if w > 1e-30 {
+                    worst = worst.max((f64::from(v) - w).abs() / w);
+                }
+            }
+        }
+        eprintln!("Bayes, test split: worst relative error {worst:e}, tolerance {tolerance:e}");
+        assert!(worst <= tolerance, "{worst:e} > {tolerance:e}");
+    }
+
+    #[test]
+    fn bayes_batch_reports_the_first_bad_row() {
+        let t = shipped();
+        let rows = batch_rows();
+        let mut out = [SENTINEL; 4];
+        assert_eq!(
+            t.bayes_batch(&rows, None, &mut out),
+            Err(BatchError::Row {
+                index: 2,
+                error: InferError::NanLogit { class: 1 }
+            })
+        );
+        assert_eq!(out[0], t.bayes(&rows[0], 1.0).unwrap().0);
+        assert_eq!(out[1], t.bayes(&rows[1], 1.0).unwrap().0);
+        assert_eq!(out[2..], [SENTINEL; 2]);
+        // A bad objectness in row 1 of valid rows; then resuming after it.
+        let valid = [rows[0], rows[1], rows[3]];
+        let mut out = [SENTINEL; 3];
+        assert_eq!(
+            t.bayes_batch(&valid, Some(&[0.5, -0.25, 0.5]), &mut out),
+            Err(BatchError::Row {
+                index: 1,
+                error: InferError::Objectness
+            })
+        );
+        assert_eq!(out[0], t.bayes(&valid[0], 0.5).unwrap().0);
+        assert_eq!(out[1..], [SENTINEL; 2]);
+        let mut rest = [SENTINEL; 1];
+        t.bayes_batch(&valid[2..], Some(&[0.5]), &mut rest).unwrap();
+        assert_eq!(rest[0], t.bayes(&valid[2], 0.5).unwrap().0);
+        // Lengths are checked before any row: nothing written.
+        let mut short = [SENTINEL; 1];
+        assert_eq!(
+            t.bayes_batch(&rows, None, &mut short),
+            Err(BatchError::LengthMismatch)
+        );
+        assert_eq!(short, [SENTINEL]);
+    }
+}

@@ -4,19 +4,21 @@
 //! The invariants of DESIGN §1.3 are checked by `mlmap::invariants`, the checkers the
 //! property tests use too; this crate adds what only the fuzz targets check (numpy's bin
 //! rule at every edge, the scores against the formula, the batch API and `DynTable`
-//! agreeing bit for bit). Every check panics (which libFuzzer reports as a crash) when
+//! agreeing bit for bit), for the ML and MAP heads and, on tables that have it, the Bayes
+//! head (DESIGN §1.6; arbitrary heads from [`ArbBayes`]). Every check panics (which libFuzzer reports as a crash) when
 //! it does not hold, with a message naming the invariant.
 
 use std::fmt::Display;
 
 use arbitrary::{Arbitrary, Unstructured};
+use mlmap::host::BayesSpec;
 use mlmap::host::DynTable;
 use mlmap::invariants::{
     self, Sum, Violation, SUBNORMAL_STEP as TINY, SUM_RELATIVE_TOLERANCE as SUM_TOLERANCE,
 };
 use mlmap::{
-    Backend, ClassSpec, EdgeMode, FastMath, Gaussian, Head, Histogram, Libm, Scores, Settings,
-    Table, TableError, UpperTail, FAST_MATH_MAX_SCORE_ERROR,
+    fast_math_max_score_error, Backend, ClassSpec, EdgeMode, FastMath, Gaussian, Head, Histogram,
+    Libm, Scores, Settings, Table, TableError, UpperTail, FAST_MATH_MAX_SCORE_ERROR,
 };
 
 /// The table shipped with the crate: K = 3, 22 ML bins, 17 MAP bins.
@@ -102,7 +104,8 @@ pub fn check_prior(g: &Gaussian, class: usize) {
 }
 
 /// Checks every table invariant of a fixed-size table through its accessors.
-pub fn check_table<const K: usize,
+pub fn check_table<
+    const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
     const BB: usize,
@@ -145,7 +148,8 @@ pub fn check_dyn_table(t: &DynTable) {
 
 /// Encodes `t` and asserts the result is `expected` byte for byte, twice (encoding is
 /// deterministic), and that decoding it gives `t` back.
-pub fn check_encoding<const K: usize,
+pub fn check_encoding<
+    const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
     const BB: usize,
@@ -420,6 +424,9 @@ pub enum Logit {
     /// An edge of this class's ML (`map = false`) or MAP histogram, moved by `ulps`
     /// representable steps: bin boundaries, where rounding decides.
     Edge { map: bool, k: u16, ulps: i8 },
+    /// An edge of this logit's Bayes axis (when the table has that head; else 0), moved
+    /// by `ulps` steps.
+    BayesEdge { k: u16, ulps: i8 },
 }
 
 /// An objectness score from fuzz input.
@@ -462,7 +469,8 @@ impl Objectness {
 }
 
 /// Turns fuzz logits into values for table `t`.
-pub fn logits<const K: usize,
+pub fn logits<
+    const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
     const BB: usize,
@@ -476,19 +484,29 @@ pub fn logits<const K: usize,
         Logit::Grid(v) => f32::from(v) / 256.0,
         Logit::Edge { map, k, ulps } => {
             let k = usize::from(k);
-            let mut x = if map {
+            let x = if map {
                 let h = t.map_histogram(i).expect("class exists");
                 h.edge(k % (B_MAP + 1))
             } else {
                 let h = t.ml_histogram(i).expect("class exists");
                 h.edge(k % (B_ML + 1))
             };
-            for _ in 0..ulps.unsigned_abs() {
-                x = if ulps > 0 { x.next_up() } else { x.next_down() };
-            }
-            x
+            step(x, ulps)
+        }
+        Logit::BayesEdge { k, ulps } => {
+            let axis = t.bayes_head().and_then(|h| h.axis(i).copied());
+            let x = axis.map_or(0.0, |a| a.edge(usize::from(k) % (a.bins() + 1)));
+            step(x, ulps)
         }
     })
+}
+
+/// `x` moved by `ulps` representable steps.
+fn step(mut x: f32, ulps: i8) -> f32 {
+    for _ in 0..ulps.unsigned_abs() {
+        x = if ulps > 0 { x.next_up() } else { x.next_down() };
+    }
+    x
 }
 
 /// Checks scores for valid inputs against invariants 1 and 2 and against the formula.
@@ -547,7 +565,8 @@ pub fn reference_likelihood<F: AsRef<[f32]>>(h: &Histogram<F>, x: f32, tail: Upp
 }
 
 /// The library's likelihood of every logit equals the definition's, for both heads.
-fn check_likelihoods<const K: usize,
+fn check_likelihoods<
+    const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
     const BB: usize,
@@ -610,7 +629,8 @@ fn map_mass<
 /// `fast_bound`: also assert the documented [`FAST_MATH_MAX_SCORE_ERROR`] between the
 /// `FastMath` and `Libm` MAP scores (it is documented for the shipped table), scaled by
 /// `OS`, plus the rounding of scores in the subnormal range (`OS` below about `1e-38`).
-pub fn check_detection<const K: usize,
+pub fn check_detection<
+    const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
     const BB: usize,
@@ -691,7 +711,8 @@ fn want_err(b: mlmap::BatchError) -> mlmap::InferError {
 }
 
 /// The batch API and the run-time shaped table compute the very same bits.
-fn check_same_elsewhere<const K: usize,
+fn check_same_elsewhere<
+    const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
     const BB: usize,
@@ -736,7 +757,8 @@ fn check_same_elsewhere<const K: usize,
 pub const MAX_DETECTIONS: usize = 8;
 
 /// Scores detections read from `u` until it is exhausted (at most [`MAX_DETECTIONS`]).
-pub fn check_detections<const K: usize,
+pub fn check_detections<
+    const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
     const BB: usize,
@@ -747,6 +769,41 @@ pub fn check_detections<const K: usize,
     fast_bound: bool,
 ) {
     let dynt = DynTable::from_table(t);
+    for_detections(t, u, |x, os| check_detection(t, &dynt, x, os, fast_bound));
+}
+
+/// As [`check_detections`], plus [`check_bayes_detection`] for each detection: for a
+/// table type with a Bayes head (`BB > 0`).
+pub fn check_detections_with_bayes<
+    const K: usize,
+    const B_ML: usize,
+    const B_MAP: usize,
+    const BB: usize,
+    const C: usize,
+>(
+    t: &Table<K, B_ML, B_MAP, BB, C>,
+    u: &mut Unstructured<'_>,
+    fast_bound: bool,
+) {
+    let dynt = DynTable::from_table(t);
+    for_detections(t, u, |x, os| {
+        check_detection(t, &dynt, x, os, fast_bound);
+        check_bayes_detection(t, &dynt, x, os);
+    });
+}
+
+/// Reads detections from `u` until it is exhausted (at most [`MAX_DETECTIONS`]).
+fn for_detections<
+    const K: usize,
+    const B_ML: usize,
+    const B_MAP: usize,
+    const BB: usize,
+    const C: usize,
+>(
+    t: &Table<K, B_ML, B_MAP, BB, C>,
+    u: &mut Unstructured<'_>,
+    mut check: impl FnMut(&[f32; K], f32),
+) {
     for _ in 0..MAX_DETECTIONS {
         if u.is_empty() {
             break;
@@ -755,6 +812,213 @@ pub fn check_detections<const K: usize,
             break;
         };
         let x = logits(t, &raw);
-        check_detection(t, &dynt, &x, os.get(), fast_bound);
+        check(&x, os.get());
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// The Bayes head (DESIGN §1.6)
+// ---------------------------------------------------------------------------------------
+
+/// An arbitrary Bayes head for a table of `K` classes, `BB` bins per logit and `C`
+/// categories: a lambda, a range per logit, rows per category and per (category,
+/// logit) frequencies from integer weights, stored as a fit stores them
+/// (`ln(h + lambda)` in `f64`, rounded to `f32`); now and then a term of any bits.
+#[derive(Arbitrary, Debug, Clone)]
+pub struct ArbBayes<const K: usize, const BB: usize, const C: usize> {
+    lambda: BayesLambda,
+    ranges: [(Real, Real); K],
+    rows: [u32; C],
+    weights: [[[u16; BB]; K]; C],
+    /// A term to overwrite with any bits (index into the terms, then the bits).
+    hostile: Option<(u16, u32)>,
+}
+
+/// The Bayes head's smoothing from fuzz input.
+#[derive(Arbitrary, Debug, Clone, Copy)]
+pub enum BayesLambda {
+    /// `10^(-v / 4096)`: from 1 down to about 1e-16.
+    Decades(u16),
+    /// Any bits (mostly invalid).
+    Bits(u32),
+}
+
+impl<const K: usize, const BB: usize, const C: usize> ArbBayes<K, BB, C> {
+    /// The head as a [`BayesSpec`] (valid unless a range, the rows, lambda or a hostile
+    /// term make it invalid).
+    pub fn spec(&self) -> BayesSpec {
+        let lambda = match self.lambda {
+            BayesLambda::Decades(v) => 10f64.powf(-f64::from(v) / 4096.0) as f32,
+            BayesLambda::Bits(b) => f32::from_bits(b),
+        };
+        let mut terms = Vec::with_capacity(K * BB * C);
+        for j in 0..K {
+            for b in 0..BB {
+                for w in &self.weights {
+                    let total: u64 = w[j].iter().map(|&v| u64::from(v)).sum();
+                    let h = if total == 0 {
+                        1.0 / BB as f64
+                    } else {
+                        f64::from(w[j][b]) / total as f64
+                    };
+                    terms.push((h + f64::from(lambda)).ln() as f32);
+                }
+            }
+        }
+        if let Some((i, bits)) = self.hostile {
+            let n = terms.len();
+            terms[usize::from(i) % n] = f32::from_bits(bits);
+        }
+        BayesSpec {
+            lambda,
+            // 0 rows (invalid) only for `u32::MAX`, a span of 0 (invalid) made 1: most
+            // heads are valid even when the input runs out (and reads as zeros).
+            rows: self
+                .rows
+                .iter()
+                .map(|&n| u64::from(n.wrapping_add(1)))
+                .collect(),
+            ranges: self
+                .ranges
+                .iter()
+                .map(|(lo, span)| {
+                    let span = span.positive();
+                    let span = if span == 0.0 { 1.0 } else { span };
+                    (lo.get(), lo.get() + span)
+                })
+                .collect(),
+            terms,
+        }
+    }
+
+    /// `table` with this Bayes head, as the fixed-size type `Table<K, B_ML, B_MAP, BB,
+    /// C>` (through `DynTable::with_bayes` and the wire format), checked by
+    /// [`check_dyn_table`] and [`check_table`]; `None` when `with_bayes` refuses the head.
+    /// Asserts that it never accepts terms that [`invariants::check_bayes_terms`]
+    /// refuses.
+    pub fn attach<const B_ML: usize, const B_MAP: usize>(
+        &self,
+        table: &Table<K, B_ML, B_MAP>,
+    ) -> Option<Table<K, B_ML, B_MAP, BB, C>> {
+        let spec = self.spec();
+        let valid_terms = (0..C).all(|c| {
+            (0..K).all(|j| {
+                let terms = (0..BB).map(|b| spec.terms[(j * BB + b) * C + c]);
+                invariants::check_bayes_terms(c, j, spec.lambda, terms, BB).is_ok()
+            })
+        });
+        match DynTable::from_table(table).with_bayes(spec.clone()) {
+            Ok(d) => {
+                assert!(
+                    valid_terms,
+                    "with_bayes accepted terms the checkers refuse: {spec:?}"
+                );
+                check_dyn_table(&d);
+                let t = Table::<K, B_ML, B_MAP, BB, C>::try_from(&d)
+                    .expect("a valid Bayes head converts to its shape");
+                check_table(&t);
+                assert_eq!(DynTable::from_table(&t), d, "Table and DynTable differ");
+                Some(t)
+            }
+            Err(_) => None,
+        }
+    }
+}
+
+/// Scores one detection with the Bayes head (FastMath, the default, and Libm) and
+/// checks DESIGN §1.6: errors for bad inputs (invariant 4, from `Table`, `DynTable` and
+/// the batch); otherwise scores in `[0, OS]` with the head's sum rule, within
+/// [`invariants::bayes_score_tolerance`] of the formula evaluated in `f64` from the
+/// view's terms ([`invariants::bayes_reference`]), the prior's shares when every logit
+/// is outside its axis, FastMath within `fast_math_max_score_error(C) * OS` of Libm
+/// (plus `OS * f32::MIN_POSITIVE` and two subnormal steps, see `tests/invariants.rs`),
+/// and the same bits from `DynTable` and the batch.
+pub fn check_bayes_detection<
+    const K: usize,
+    const B_ML: usize,
+    const B_MAP: usize,
+    const BB: usize,
+    const C: usize,
+>(
+    t: &Table<K, B_ML, B_MAP, BB, C>,
+    dynt: &DynTable,
+    x: &[f32; K],
+    objectness: f32,
+) {
+    let head = t.bayes_head().expect("a table type with a Bayes head");
+    let fast = t.bayes(x, objectness);
+    let libm = t.bayes_with::<Libm>(x, objectness);
+    let what = format_args!("Bayes: x = {x:?}, OS = {objectness:e}");
+    for r in [&fast, &libm] {
+        must(invariants::check_error(x, objectness, r.err()), &what);
+    }
+    let mut out = [0.0f32; K];
+    let mut scratch = [0.0f32; C];
+    let mut batch = [[0.0f32; K]; 2];
+    let xs = [*x, *x];
+    let os = [objectness, objectness];
+    let (Ok(fast), Ok(libm)) = (fast, libm) else {
+        let error = invariants::expected_error(x, objectness).expect("an error was expected");
+        assert_eq!(
+            dynt.bayes_into::<FastMath>(x, objectness, &mut out, &mut scratch),
+            Err(error),
+            "{what}: DynTable"
+        );
+        assert_eq!(
+            t.bayes_batch(&xs, Some(&os), &mut batch),
+            Err(mlmap::BatchError::Row { index: 0, error }),
+            "{what}: bayes_batch"
+        );
+        return;
+    };
+    let mut want = [0.0f64; K];
+    let mut s64 = [0.0f64; C];
+    assert!(invariants::bayes_reference(
+        &head, x, objectness, &mut want, &mut s64
+    ));
+    let unknown = (0..K).all(|j| head.axis(j).and_then(|a| a.bin(x[j])).is_none());
+    for (name, s) in [("FastMath", &fast.0), ("Libm", &libm.0)] {
+        must(
+            invariants::check_scores(s, objectness, invariants::bayes_sum(&head)),
+            format_args!("{what}: {name} {s:?}"),
+        );
+        if let Some(i) = invariants::bayes_mismatch(&head, s, &want, objectness) {
+            panic!(
+                "{what}: {name} score {i} of {s:?} is not the formula's {want:?} within a relative {:e}",
+                invariants::bayes_score_tolerance(&head)
+            );
+        }
+        if unknown {
+            must(
+                invariants::check_prior_share(s, objectness, &head),
+                format_args!("{what}: {name} {s:?}"),
+            );
+        }
+    }
+    let os64 = f64::from(objectness);
+    let bound = f64::from(fast_math_max_score_error(C)) * os64
+        + os64 * f64::from(f32::MIN_POSITIVE)
+        + 2.0 * TINY;
+    for (a, b) in fast.0.iter().zip(&libm.0) {
+        assert!(
+            f64::from((a - b).abs()) <= bound,
+            "{what}: FastMath {:?} and Libm {:?} more than {bound:e} apart",
+            fast.0,
+            libm.0
+        );
+    }
+    let bits = |s: &[f32; K]| s.map(f32::to_bits);
+    dynt.bayes_into::<FastMath>(x, objectness, &mut out, &mut scratch)
+        .expect("valid");
+    assert_eq!(bits(&out), bits(&fast.0), "{what}: DynTable differs");
+    dynt.bayes_into::<Libm>(x, objectness, &mut out, &mut scratch)
+        .expect("valid");
+    assert_eq!(bits(&out), bits(&libm.0), "{what}: DynTable Libm differs");
+    t.bayes_batch(&xs, Some(&os), &mut batch)
+        .expect("valid rows");
+    assert_eq!(
+        bits(&batch[1]),
+        bits(&fast.0),
+        "{what}: bayes_batch differs"
+    );
 }
