@@ -212,7 +212,8 @@ fn valid_tables_pass() {
     let t = Table::<2, 2, 1>::from_parts(settings(1e-3, 1e-6), [spec("car"), spec("bus")]).unwrap();
     assert_eq!(check_table(&t), Ok(()));
     let shipped =
-        Table::<3, 22, 17, 22, 4>::from_bytes(include_bytes!("../../tables/default.mlmap")).unwrap();
+        Table::<3, 22, 17, 22, 4>::from_bytes(include_bytes!("../../tables/default.mlmap"))
+            .unwrap();
     assert_eq!(check_table(&shipped), Ok(()));
     #[cfg(feature = "std")]
     assert_eq!(
