@@ -28,8 +28,8 @@ use core::mem::{align_of, size_of};
 use core::ptr;
 
 use mlmap::{
-    decide, Bounded, BoundedTable, DecodeError, EdgeMode, FastMath, InferError, Libm, TableView,
-    UpperTail,
+    decide, Bounded, BoundedTable, DecodeError, EdgeMode, FastMath, Head, InferError, Libm,
+    TableView, UpperTail,
 };
 
 mod limits {
@@ -567,20 +567,12 @@ unsafe fn class_index_of(
     unsafe { put(class_index, found) }
 }
 
-/// Which head scores.
-#[derive(Clone, Copy)]
-enum HeadKind {
-    Ml,
-    Map,
-    Bayes,
-}
-
 /// Scores one detection with `K`, the table's class count, known at compile time: the
 /// layer's loops then have constant trip counts, as for the fixed-size Rust `Table`.
 #[inline(always)]
 fn score_k<const K: usize>(
     v: &View<'_>,
-    head: HeadKind,
+    head: Head,
     x: &[f32],
     objectness: f32,
     out: &mut [f32],
@@ -590,9 +582,9 @@ fn score_k<const K: usize>(
     };
     let mut scratch = [0.0f32; K];
     match head {
-        HeadKind::Ml => v.ml_into(x, objectness, out, &mut scratch),
-        HeadKind::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
-        HeadKind::Bayes => score_bayes(v, x, objectness, out),
+        Head::Ml => v.ml_into(x, objectness, out, &mut scratch),
+        Head::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
+        Head::Bayes => score_bayes(v, x, objectness, out),
     }
 }
 
@@ -614,7 +606,7 @@ fn score_bayes(
 #[inline(always)]
 fn score(
     v: &View<'_>,
-    head: HeadKind,
+    head: Head,
     x: &[f32],
     objectness: f32,
     out: &mut [f32],
@@ -628,9 +620,9 @@ fn score(
                     let mut scratch = [0.0f32; MAX_CLASSES];
                     let s = scratch.get_mut(..x.len()).unwrap_or(&mut []);
                     match head {
-                        HeadKind::Ml => v.ml_into(x, objectness, out, s),
-                        HeadKind::Map => v.map_into::<Libm>(x, objectness, out, s),
-                        HeadKind::Bayes => score_bayes(v, x, objectness, out),
+                        Head::Ml => v.ml_into(x, objectness, out, s),
+                        Head::Map => v.map_into::<Libm>(x, objectness, out, s),
+                        Head::Bayes => score_bayes(v, x, objectness, out),
                     }
                 }
             }
@@ -649,7 +641,7 @@ fn overlap(a: usize, a_len: usize, b: usize, b_len: usize) -> bool {
 /// One detection through `head`: the checks of the C API around [`score`].
 #[inline(always)]
 unsafe fn detection(
-    head: HeadKind,
+    head: Head,
     table: *const mlmap_table_t,
     logits: *const f32,
     n_logits: usize,
@@ -703,7 +695,7 @@ unsafe fn detection(
 /// Rows of a batch through `head`.
 #[allow(clippy::too_many_arguments)]
 unsafe fn batch(
-    head: HeadKind,
+    head: Head,
     table: *const mlmap_table_t,
     logits: *const f32,
     rows: usize,
@@ -808,17 +800,7 @@ pub unsafe extern "C" fn mlmap_ml(
     out_len: usize,
 ) -> mlmap_status_t {
     // SAFETY: the caller passes `n_logits` floats at `logits`, `out_len` at `out`.
-    status(unsafe {
-        detection(
-            HeadKind::Ml,
-            table,
-            logits,
-            n_logits,
-            objectness,
-            out,
-            out_len,
-        )
-    })
+    status(unsafe { detection(Head::Ml, table, logits, n_logits, objectness, out, out_len) })
 }
 
 /// Scores one detection with the MAP head: `out[i] = OS (L_i P_i + lambda) / sum_j
@@ -843,17 +825,7 @@ pub unsafe extern "C" fn mlmap_map(
     out_len: usize,
 ) -> mlmap_status_t {
     // SAFETY: as for `mlmap_ml`.
-    status(unsafe {
-        detection(
-            HeadKind::Map,
-            table,
-            logits,
-            n_logits,
-            objectness,
-            out,
-            out_len,
-        )
-    })
+    status(unsafe { detection(Head::Map, table, logits, n_logits, objectness, out, out_len) })
 }
 
 /// Scores one detection with the Bayes head: `out[i] = OS p_i`, with `p` the
@@ -879,7 +851,7 @@ pub unsafe extern "C" fn mlmap_bayes(
     // SAFETY: as for `mlmap_ml`.
     status(unsafe {
         detection(
-            HeadKind::Bayes,
+            Head::Bayes,
             table,
             logits,
             n_logits,
@@ -922,7 +894,7 @@ pub unsafe extern "C" fn mlmap_ml_batch(
     // SAFETY: the caller passes the buffers described above.
     status(unsafe {
         batch(
-            HeadKind::Ml,
+            Head::Ml,
             table,
             logits,
             rows,
@@ -961,7 +933,7 @@ pub unsafe extern "C" fn mlmap_map_batch(
     // SAFETY: as for `mlmap_ml_batch`.
     status(unsafe {
         batch(
-            HeadKind::Map,
+            Head::Map,
             table,
             logits,
             rows,
@@ -1000,7 +972,7 @@ pub unsafe extern "C" fn mlmap_bayes_batch(
     // SAFETY: as for `mlmap_ml_batch`.
     status(unsafe {
         batch(
-            HeadKind::Bayes,
+            Head::Bayes,
             table,
             logits,
             rows,
