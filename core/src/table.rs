@@ -7,9 +7,9 @@ use crate::error::{BatchError, DecodeError, EncodeError, InferError, TableError}
 use crate::gaussian::Gaussian;
 use crate::histogram::{Axis, Histogram};
 use crate::layer::Scores;
-use crate::math::{Backend, Libm};
+use crate::math::Backend;
 use crate::name::ClassName;
-use crate::view::{self, BayesStorage, Slots, TableView};
+use crate::view::{self, BayesBackend, BayesStorage, MapBackend, Slots, TableView};
 use crate::wire::{self, ClassSpec, Settings};
 
 /// A fitted table for `K` classes: `B_ML` bins in the ML head's histograms, `B_MAP` in
@@ -316,7 +316,7 @@ impl<
         Ok(Scores(out))
     }
 
-    /// MAP scores of one detection with the default [`Libm`] backend:
+    /// MAP scores of one detection with the default [`Libm`](crate::Libm) backend:
     /// `OS * (L_i P_i + lambda) / sum_j (L_j P_j + lambda)`.
     ///
     /// # Errors
@@ -328,7 +328,7 @@ impl<
     /// Never.
     #[inline]
     pub fn map(&self, logits: &[f32; K], objectness: f32) -> Result<Scores<K>, InferError> {
-        self.map_with::<Libm>(logits, objectness)
+        self.map_with::<MapBackend>(logits, objectness)
     }
 
     /// MAP scores of one detection with the maths backend `M` (for example `FastMath`).
@@ -371,7 +371,7 @@ impl<
     /// Never.
     #[inline]
     pub fn bayes(&self, logits: &[f32; K], objectness: f32) -> Result<Scores<K>, InferError> {
-        self.bayes_with::<crate::FastMath>(logits, objectness)
+        self.bayes_with::<BayesBackend>(logits, objectness)
     }
 
     /// Bayes scores of one detection with the maths backend `M`.
@@ -423,7 +423,7 @@ impl<
         batch(logits, objectness, out, |x, os| self.ml(x, os))
     }
 
-    /// MAP scores of a batch with the default [`Libm`] backend; see [`Table::ml_batch`].
+    /// MAP scores of a batch with the default [`Libm`](crate::Libm) backend; see [`Table::ml_batch`].
     ///
     /// # Errors
     ///
@@ -438,7 +438,7 @@ impl<
         objectness: Option<&[f32]>,
         out: &mut [[f32; K]],
     ) -> Result<(), BatchError> {
-        self.map_batch_with::<Libm>(logits, objectness, out)
+        self.map_batch_with::<MapBackend>(logits, objectness, out)
     }
 
     /// MAP scores of a batch with the backend `M`; see [`Table::ml_batch`].

@@ -174,6 +174,43 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     }
 }
 
+/// The backend of the MAP head's `exp` when none is named (`Table::map`).
+pub(crate) type MapBackend = crate::math::Libm;
+
+/// The backend of the Bayes head's softmax when none is named (`Table::bayes`).
+pub(crate) type BayesBackend = crate::FastMath;
+
+impl<F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'_, F, G> {
+    /// Scores one detection with `head` and the backend a fixed-size
+    /// [`Table`](crate::Table) uses for it by default (`Table::ml`, `Table::map`,
+    /// `Table::bayes`), so that host tools reproduce the device's bits. `scratch` holds
+    /// at least K floats, and at least one per category for the Bayes head.
+    ///
+    /// # Errors
+    ///
+    /// As [`TableView::ml_into`], [`TableView::map_into`] or [`TableView::bayes_into`].
+    #[inline]
+    pub fn score_into(
+        &self,
+        head: Head,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        let need = match head {
+            Head::Ml | Head::Map => self.k(),
+            Head::Bayes => self.bayes.map_or(0, |b| b.categories()),
+        };
+        let scratch = scratch.get_mut(..need).ok_or(InferError::Length)?;
+        match head {
+            Head::Ml => self.ml_into(logits, objectness, out, scratch),
+            Head::Map => self.map_into::<MapBackend>(logits, objectness, out, scratch),
+            Head::Bayes => self.bayes_into::<BayesBackend>(logits, objectness, out, scratch),
+        }
+    }
+}
+
 /// A table's storage, borrowed mutably for decoding: the one decoder behind
 /// [`Table::from_bytes`](crate::Table::from_bytes) and `DynTable::from_bytes`. Sized
 /// from the header before parsing, so a sequence longer than announced is malformed.

@@ -16,7 +16,7 @@ use super::metrics::{self, Metrics, MetricsConfig};
 use super::names::{Name, Named};
 use super::tune::{Guards, Objective, Reference};
 use super::DynTable;
-use crate::{FastMath, Head, Libm};
+use crate::Head;
 
 /// A way of turning logits into scores, compared by `eval`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -104,27 +104,21 @@ pub fn head_scores(
 ) -> Result<Vec<f64>, HostError> {
     let k = table.k();
     let mut out = Vec::with_capacity(data.logits.len());
-    // Scratch: K floats for ML and MAP, one per category for Bayes.
-    let cats = match head {
-        Head::Bayes => table.bayes().map_or(k, |b| b.categories()),
-        Head::Ml | Head::Map => k,
-    };
+    // Scratch: K floats, or one per category for the Bayes head.
+    let cats = table.bayes().map_or(k, |b| b.categories().max(k));
     let (mut x, mut s, mut scratch) = (
         std::vec![0f32; k],
         std::vec![0f32; k],
         std::vec![0f32; cats],
     );
+    let view = table.view();
     let rows = data.logits.chunks_exact(k).zip(&data.objectness);
     for ((xs, &os), loc) in rows.zip(&data.locations) {
         for (d, &v) in x.iter_mut().zip(xs) {
             *d = v as f32;
         }
-        let scored = match head {
-            Head::Ml => table.ml_into(&x, os as f32, &mut s, &mut scratch),
-            Head::Map => table.map_into::<Libm>(&x, os as f32, &mut s, &mut scratch),
-            // The device's default backend for this head (`Table::bayes`).
-            Head::Bayes => table.bayes_into::<FastMath>(&x, os as f32, &mut s, &mut scratch),
-        };
+        // Each head with the device's default backend (`Table::ml`, `map`, `bayes`).
+        let scored = view.score_into(head, &x, os as f32, &mut s, &mut scratch);
         scored.map_err(|e| HostError::Input(std::format!("{}: {e}", at(path, *loc))))?;
         out.extend(s.iter().map(|&v| f64::from(v)));
     }
