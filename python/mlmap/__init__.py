@@ -1,0 +1,31 @@
+"""mlmap: the ML, MAP and Bayes probability layers for object detectors, from Python.
+
+A table is fitted from training logits (``mlmap.fit``), tuned on validation data
+(``mlmap.tune``), saved as a ``.mlmap`` file for the firmware (``Table.save``), and
+scores numpy arrays with the device's own ``f32`` code (``Table.ml``, ``Table.map``,
+``Table.bayes``). ``mlmap.evaluate`` reports every calibration metric of every method.
+
+Arrays: logits are ``(N, K)`` float32 or float64, in any memory order (a PyTorch tensor
+via ``tensor.numpy()``); labels are ``(N,)`` integers, ``0 .. K-1`` a class (the table's
+order) and ``-1`` background (a detection that matched no object); objectness is
+``None`` (1.0), a number, or an ``(N,)`` float array in ``[0, 1]``.
+
+Bad input raises ``ValueError`` with the message the ``mlmap`` command prints for the
+same fault; a corrupt table raises ``mlmap.TableError``, a ``ValueError``.
+"""
+
+from ._mlmap import FORMAT_VERSION, Table, TableError, decide, evaluate
+
+__all__ = [
+    "FORMAT_VERSION",
+    "HEADS",
+    "Table",
+    "TableError",
+    "decide",
+    "evaluate",
+]
+
+__version__ = "0.1.0"
+
+#: The heads a table may hold, by the names ``Table.scores`` and reports use.
+HEADS = ("ml", "map", "bayes")

@@ -1,0 +1,72 @@
+//! `mlmap._mlmap`, the extension module of the Python package `mlmap`: tables, scoring
+//! numpy arrays through the layer's `f32` code, evaluation, fitting and the mergeable
+//! fit statistics, all on the library `mlmap` (feature `std`).
+//!
+//! Nothing here may panic on input: every array is checked at the boundary
+//! ([`arrays`]) and every failure is a Python exception ([`errors`]).
+
+#![deny(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+mod arrays;
+mod errors;
+mod evaluate;
+mod score;
+mod table;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+
+use crate::arrays::{value_error, Rows};
+
+/// The decided class of every row (DESIGN §1.7): the largest score, an exact tie
+/// going to the larger logit, then to the lower index. `scores` and `logits` are
+/// `(N, K)` float arrays; returns `(N,)` int64 class indices.
+#[pyfunction]
+fn decide<'py>(
+    py: Python<'py>,
+    scores: &Bound<'py, PyAny>,
+    logits: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<i64>>> {
+    let s = arrays::logits(scores, "scores", true)?;
+    let x = arrays::logits(logits, "logits", true)?;
+    if (s.rows, s.cols) != (x.rows, x.cols) {
+        return Err(value_error(format!(
+            "scores have shape ({}, {}) but logits ({}, {})",
+            s.rows, s.cols, x.rows, x.cols
+        )));
+    }
+    let k = s.cols.max(1);
+    fn pick<S, L>(s: &[S], x: &[L], k: usize) -> Vec<i64>
+    where
+        S: Copy + PartialOrd,
+        L: Copy + PartialOrd,
+    {
+        s.chunks_exact(k)
+            .zip(x.chunks_exact(k))
+            .map(|(s, x)| mlmap::decide(s, x) as i64)
+            .collect()
+    }
+    let out = match (s.rows(), x.rows()) {
+        (Rows::F32(s), Rows::F32(x)) => pick(s, x, k),
+        (Rows::F32(s), Rows::F64(x)) => pick(s, x, k),
+        (Rows::F64(s), Rows::F32(x)) => pick(s, x, k),
+        (Rows::F64(s), Rows::F64(x)) => pick(s, x, k),
+    };
+    Ok(PyArray1::from_vec(py, out))
+}
+
+/// The extension module.
+#[pymodule]
+fn _mlmap(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<table::PyTable>()?;
+    m.add("TableError", m.py().get_type::<errors::TableError>())?;
+    m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(decide, m)?)?;
+    m.add("FORMAT_VERSION", mlmap::FORMAT_VERSION)?;
+    Ok(())
+}

@@ -1,0 +1,94 @@
+//! Scoring many rows through the layer, in parallel over chunks of rows, with no
+//! Python object in reach (so it runs with the GIL released).
+
+use mlmap::host::DynTable;
+use mlmap::{Head, InferError};
+use rayon::prelude::*;
+
+use crate::arrays::{Column, Rows};
+
+/// Rows per parallel task: large enough that a task costs far more than its
+/// scheduling, small enough that two cores share the work evenly.
+const CHUNK_ROWS: usize = 16_384;
+
+/// Below this many rows the work stays on the calling thread.
+const PARALLEL_MIN_ROWS: usize = 4 * CHUNK_ROWS;
+
+/// Where scoring stopped: the first row the layer refused, and why.
+#[derive(Debug, Clone, Copy)]
+pub struct RowError {
+    /// Row index.
+    pub row: usize,
+    /// The layer's error.
+    pub error: InferError,
+}
+
+/// Scores rows `first..` of `logits` (as many as `out` holds) into `out`.
+fn score_chunk(
+    table: &DynTable,
+    head: Head,
+    logits: Rows<'_>,
+    objectness: Column<'_>,
+    k: usize,
+    first: usize,
+    out: &mut [f32],
+) -> Result<(), RowError> {
+    let view = table.view();
+    let cats = table.bayes().map_or(k, |b| b.categories().max(k));
+    let mut scratch = vec![0f32; cats];
+    let mut x = vec![0f32; k];
+    for (i, s) in out.chunks_exact_mut(k).enumerate() {
+        let row = first + i;
+        let xs: &[f32] = match logits {
+            Rows::F32(all) => all.get(row * k..(row + 1) * k).unwrap_or(&[]),
+            Rows::F64(all) => {
+                let src = all.get(row * k..(row + 1) * k).unwrap_or(&[]);
+                for (d, &v) in x.iter_mut().zip(src) {
+                    *d = v as f32;
+                }
+                &x
+            }
+        };
+        let os = objectness.get_f32(row);
+        view.score_into(head, xs, os, s, &mut scratch)
+            .map_err(|error| RowError { row, error })?;
+    }
+    Ok(())
+}
+
+/// The `N x K` scores of `head` for every row, row-major, computed on the rayon pool
+/// for large inputs. The first error is the one of the lowest row, as a serial loop
+/// would report.
+///
+/// # Errors
+///
+/// The first row the layer refuses (a NaN logit, a bad objectness), or
+/// [`InferError::NoBayesHead`].
+pub fn score(
+    table: &DynTable,
+    head: Head,
+    logits: Rows<'_>,
+    objectness: Column<'_>,
+    n: usize,
+) -> Result<Vec<f32>, RowError> {
+    let k = table.k();
+    if head == Head::Bayes && table.bayes().is_none() {
+        return Err(RowError {
+            row: 0,
+            error: InferError::NoBayesHead,
+        });
+    }
+    let mut out = vec![0f32; n * k];
+    if n < PARALLEL_MIN_ROWS || rayon::current_num_threads() < 2 {
+        score_chunk(table, head, logits, objectness, k, 0, &mut out)?;
+        return Ok(out);
+    }
+    let results: Vec<Result<(), RowError>> = out
+        .par_chunks_mut(CHUNK_ROWS * k)
+        .enumerate()
+        .map(|(c, chunk)| score_chunk(table, head, logits, objectness, k, c * CHUNK_ROWS, chunk))
+        .collect();
+    // Chunks are in row order, and each stops at its first error.
+    results.into_iter().collect::<Result<(), RowError>>()?;
+    Ok(out)
+}

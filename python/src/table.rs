@@ -1,0 +1,359 @@
+//! `mlmap.Table`: a validated table of any shape, its bytes, its settings, and scoring
+//! numpy arrays through the layer's own `f32` code.
+
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+use std::path::PathBuf;
+
+use mlmap::host::names::Named;
+use mlmap::host::DynTable;
+use mlmap::{Head, InferError};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::pybacked::PyBackedBytes;
+use pyo3::types::{PyBytes, PyTuple};
+
+use crate::arrays::{self, value_error};
+use crate::errors::{io_error, table_error};
+use crate::score::{self, RowError};
+
+/// A fitted mlmap table (any number of classes and bins), immutable.
+///
+/// Build one with `mlmap.fit`, `mlmap.tune`, `Table.load(path)` or
+/// `Table.from_bytes(data)`. Every way in checks the checksum and every table
+/// invariant, and a bad table raises `mlmap.TableError` (a `ValueError`) with the
+/// layer's message.
+///
+/// Scoring (`ml`, `map`, `bayes`, `scores`) runs the device's `f32` code on every row,
+/// so the scores are bit for bit those of the firmware and of `mlmap apply`.
+#[pyclass(module = "mlmap", frozen, name = "Table")]
+pub struct PyTable {
+    pub(crate) table: DynTable,
+    /// The canonical encoding (DESIGN §6.10): equal tables have equal bytes.
+    pub(crate) bytes: Vec<u8>,
+}
+
+impl PyTable {
+    /// Wraps a table, encoding it once.
+    pub(crate) fn new(table: DynTable) -> PyResult<Self> {
+        let bytes = table
+            .to_vec()
+            .map_err(|e| table_error(format!("cannot encode the table: {e}")))?;
+        Ok(Self { table, bytes })
+    }
+
+    fn head_names(&self) -> Vec<&'static str> {
+        let mut heads = vec![Head::Ml.name(), Head::Map.name()];
+        if self.table.bayes().is_some() {
+            heads.push(Head::Bayes.name());
+        }
+        heads
+    }
+
+    /// Scores `logits` with `head`, releasing the GIL while the layer runs.
+    fn score_array<'py>(
+        &self,
+        py: Python<'py>,
+        head: Head,
+        logits: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        let x = arrays::logits(logits, "logits", false)?;
+        let k = self.table.k();
+        if x.cols != k {
+            return Err(value_error(format!(
+                "logits: has {} columns; the table has {k} classes ({})",
+                x.cols,
+                self.table.class_names().collect::<Vec<_>>().join(", ")
+            )));
+        }
+        let n = x.rows;
+        let os = arrays::objectness(objectness, "objectness", n)?;
+        let (rows, col, table) = (x.rows(), os.column(), &self.table);
+        let scored = py.detach(|| score::score(table, head, rows, col, n));
+        let out = scored.map_err(|RowError { row, error }| match error {
+            InferError::NoBayesHead => value_error(error.to_string()),
+            InferError::Objectness => value_error(format!("objectness: row index {row}: {error}")),
+            _ => value_error(format!("logits: row index {row}: {error}")),
+        })?;
+        PyArray1::from_vec(py, out).reshape([n, k])
+    }
+}
+
+/// `(edges, frequencies)` of a histogram.
+type EdgesAndFrequencies<'py> = (Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>);
+
+/// A head by its name in reports (`ml`, `map`, `bayes`).
+pub fn parse_head(name: &str) -> PyResult<Head> {
+    Head::from_name(name).map_err(|e| value_error(e.to_string()))
+}
+
+#[pymethods]
+impl PyTable {
+    /// Decodes a table from the bytes of a `.mlmap` file.
+    ///
+    /// Raises `mlmap.TableError` (a `ValueError`) with the layer's message when the
+    /// bytes are not a valid table.
+    #[staticmethod]
+    fn from_bytes(data: PyBackedBytes) -> PyResult<Self> {
+        let table = DynTable::from_bytes(&data).map_err(|e| table_error(e.to_string()))?;
+        Self::new(table)
+    }
+
+    /// The table's bytes (the `.mlmap` file format, docs/FORMAT.md).
+    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.bytes)
+    }
+
+    /// Reads and validates a `.mlmap` file; errors name the file, as `mlmap` does.
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Self> {
+        let bytes = std::fs::read(&path).map_err(|e| io_error(&path, &e))?;
+        let table = DynTable::from_bytes(&bytes)
+            .map_err(|e| table_error(format!("{}: {e}", path.display())))?;
+        Self::new(table)
+    }
+
+    /// Writes the table to `path` (through a temporary file renamed into place, so a
+    /// failed write never leaves a half-written table).
+    fn save(&self, path: PathBuf) -> PyResult<()> {
+        crate::errors::write_atomic(&path, &self.bytes)
+    }
+
+    /// Class names, in column order.
+    #[getter]
+    fn classes(&self) -> Vec<String> {
+        self.table.class_names().map(str::to_string).collect()
+    }
+
+    /// Number of classes K.
+    #[getter]
+    fn k(&self) -> usize {
+        self.table.k()
+    }
+
+    /// The heads the table holds: `("ml", "map")` or `("ml", "map", "bayes")`.
+    #[getter]
+    fn heads<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
+        PyTuple::new(py, self.head_names())
+    }
+
+    /// Bins of the ML histograms.
+    #[getter]
+    fn bins_ml(&self) -> usize {
+        self.table.bins_ml()
+    }
+
+    /// Bins of the MAP histograms.
+    #[getter]
+    fn bins_map(&self) -> usize {
+        self.table.bins_map()
+    }
+
+    /// Bins per logit of the Bayes head; `None` without that head.
+    #[getter]
+    fn bins_bayes(&self) -> Option<usize> {
+        self.table.bayes().map(|b| b.bins())
+    }
+
+    /// Smoothing lambda of the ML head (the `f32` the table stores).
+    #[getter]
+    fn lambda_ml(&self) -> f32 {
+        self.table.settings().lambda_ml
+    }
+
+    /// Smoothing lambda of the MAP head.
+    #[getter]
+    fn lambda_map(&self) -> f32 {
+        self.table.settings().lambda_map
+    }
+
+    /// Smoothing lambda of the Bayes head; `None` without that head.
+    #[getter]
+    fn lambda_bayes(&self) -> Option<f32> {
+        self.table.bayes().map(|b| b.lambda())
+    }
+
+    /// How the fit placed the bin edges: `"linspace"` or `"matlab"`.
+    #[getter]
+    fn edges(&self) -> &'static str {
+        self.table.settings().edge_mode.name()
+    }
+
+    /// The likelihood above the last edge: `"zero"` or `"clamp"`.
+    #[getter]
+    fn upper_tail(&self) -> &'static str {
+        self.table.settings().upper_tail.name()
+    }
+
+    /// Training rows per class (the fit's provenance).
+    #[getter]
+    fn training_rows(&self) -> Vec<u64> {
+        self.table.rows().to_vec()
+    }
+
+    /// The Bayes head's categories: the classes, then `"background"` when it learnt
+    /// one; `None` without that head.
+    #[getter]
+    fn categories(&self) -> Option<Vec<String>> {
+        let b = self.table.bayes()?;
+        let mut c = self.classes();
+        if b.has_background() {
+            c.push("background".into());
+        }
+        Some(c)
+    }
+
+    /// The Gaussian priors of the MAP head: `(mean, variance)` per class.
+    #[getter]
+    fn priors(&self) -> Vec<(f32, f32)> {
+        self.table
+            .priors()
+            .iter()
+            .map(|g| (g.mean(), g.variance()))
+            .collect()
+    }
+
+    /// Size of the encoded table in bytes.
+    #[getter]
+    fn size(&self) -> usize {
+        self.bytes.len()
+    }
+
+    /// The histogram of `head` (`"ml"` or `"map"`) for class `cls` (an index or a
+    /// name): `(edges, frequencies)`, `B + 1` edges as the layer computes them (`f32`)
+    /// and `B` frequencies.
+    fn histogram<'py>(
+        &self,
+        py: Python<'py>,
+        head: &str,
+        cls: &Bound<'py, PyAny>,
+    ) -> PyResult<EdgesAndFrequencies<'py>> {
+        let hists = match parse_head(head)? {
+            Head::Ml => self.table.ml_histograms(),
+            Head::Map => self.table.map_histograms(),
+            Head::Bayes => {
+                return Err(value_error(
+                    "the Bayes head has one histogram per logit and category; \
+                     histogram() takes \"ml\" or \"map\"",
+                ))
+            }
+        };
+        let i = self.class_index(cls)?;
+        let h = hists
+            .get(i)
+            .ok_or_else(|| value_error(format!("no class {i}")))?;
+        let edges: Vec<f32> = (0..=h.bins()).map(|b| h.edge(b)).collect();
+        Ok((
+            PyArray1::from_vec(py, edges),
+            PyArray1::from_vec(py, h.frequencies().to_vec()),
+        ))
+    }
+
+    /// ML scores of every row: `logits` is `(N, K)` float32 or float64 (any order),
+    /// `objectness` `None` (1.0), a number or an `(N,)` array in `[0, 1]`. Returns
+    /// `(N, K)` float32, each row summing to its objectness.
+    #[pyo3(signature = (logits, objectness=None))]
+    fn ml<'py>(
+        &self,
+        py: Python<'py>,
+        logits: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        self.score_array(py, Head::Ml, logits, objectness)
+    }
+
+    /// MAP scores of every row (as `ml`).
+    #[pyo3(signature = (logits, objectness=None))]
+    fn map<'py>(
+        &self,
+        py: Python<'py>,
+        logits: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        self.score_array(py, Head::Map, logits, objectness)
+    }
+
+    /// Bayes scores of every row (as `ml`; with a background category a row sums to
+    /// at most its objectness). Raises `ValueError` for a table without that head.
+    #[pyo3(signature = (logits, objectness=None))]
+    fn bayes<'py>(
+        &self,
+        py: Python<'py>,
+        logits: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        self.score_array(py, Head::Bayes, logits, objectness)
+    }
+
+    /// The scores of `head` (`"ml"`, `"map"` or `"bayes"`), as `ml`.
+    #[pyo3(signature = (head, logits, objectness=None))]
+    fn scores<'py>(
+        &self,
+        py: Python<'py>,
+        head: &str,
+        logits: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        self.score_array(py, parse_head(head)?, logits, objectness)
+    }
+
+    fn __repr__(&self) -> String {
+        let classes: Vec<String> = self.table.class_names().map(|c| format!("'{c}'")).collect();
+        let bins = match self.table.bayes() {
+            Some(b) => format!(
+                "ml={}, map={}, bayes={}",
+                self.table.bins_ml(),
+                self.table.bins_map(),
+                b.bins()
+            ),
+            None => format!("ml={}, map={}", self.table.bins_ml(), self.table.bins_map()),
+        };
+        format!(
+            "Table(classes=[{}], bins=({bins}), edges={:?}, size={})",
+            classes.join(", "),
+            self.edges(),
+            self.bytes.len()
+        )
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<PyTable>()
+            .is_ok_and(|o| o.get().bytes == self.bytes)
+    }
+
+    fn __hash__(&self) -> u64 {
+        let mut h = DefaultHasher::new();
+        self.bytes.hash(&mut h);
+        h.finish()
+    }
+
+    /// Pickles through the table's bytes.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let py = slf.py();
+        let from_bytes = slf.get_type().getattr("from_bytes")?;
+        Ok((from_bytes, (PyBytes::new(py, &slf.get().bytes),)))
+    }
+}
+
+impl PyTable {
+    /// A class given as an index or a name.
+    fn class_index(&self, cls: &Bound<'_, PyAny>) -> PyResult<usize> {
+        let k = self.table.k();
+        if let Ok(name) = cls.extract::<String>() {
+            return self
+                .table
+                .class_names()
+                .position(|c| c == name)
+                .ok_or_else(|| value_error(format!("{name:?} is not a class of the table")));
+        }
+        let i: i64 = cls.extract()?;
+        usize::try_from(i)
+            .ok()
+            .filter(|&i| i < k)
+            .ok_or_else(|| value_error(format!("class index {i} is not in 0..{k}")))
+    }
+}
