@@ -12,17 +12,39 @@ order) and ``-1`` background (a detection that matched no object); objectness is
 
 Bad input raises ``ValueError`` with the message the ``mlmap`` command prints for the
 same fault; a corrupt table raises ``mlmap.TableError``, a ``ValueError``.
+
+Fitting across processes or machines (docs/SCALE.md): ``FitStats`` (pass a) of every
+shard, merged (``+``, ``sum``); its ``edges(...)``; ``FitCounts`` (pass b) of every shard
+over those edges, merged; ``finish(stats, counts)``: the bytes ``fit`` gives on all rows.
 """
 
-from ._mlmap import FORMAT_VERSION, Table, TableError, decide, evaluate
+from ._mlmap import (
+    FORMAT_VERSION,
+    FitCounts,
+    FitEdges,
+    FitStats,
+    Table,
+    TableError,
+    decide,
+    evaluate,
+    finish,
+    fit,
+    tune,
+)
 
 __all__ = [
     "FORMAT_VERSION",
     "HEADS",
+    "FitCounts",
+    "FitEdges",
+    "FitStats",
     "Table",
     "TableError",
     "decide",
     "evaluate",
+    "finish",
+    "fit",
+    "tune",
 ]
 
 __version__ = "0.1.0"

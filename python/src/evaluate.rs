@@ -91,7 +91,7 @@ pub fn check_finite(values: &[f64], k: usize, classes: &[String], what: &str) ->
 
 /// A data set given as a tuple `(logits, labels)` or `(logits, labels, objectness)`
 /// (for the out-of-distribution set, labels may be `None`), or a bare logit array.
-fn data_set(classes: &[String], obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Loaded> {
+pub fn data_set(classes: &[String], obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Loaded> {
     let parts: Vec<Bound<'_, PyAny>> = if let Ok(t) = obj.cast::<PyTuple>() {
         t.iter().collect()
     } else if let Ok(l) = obj.cast::<PyList>() {

@@ -15,7 +15,9 @@
 mod arrays;
 mod errors;
 mod evaluate;
+mod fit;
 mod score;
+mod source;
 mod table;
 
 use numpy::PyArray1;
@@ -67,6 +69,12 @@ fn _mlmap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TableError", m.py().get_type::<errors::TableError>())?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(decide, m)?)?;
+    m.add_class::<fit::PyFitStats>()?;
+    m.add_class::<fit::PyFitEdges>()?;
+    m.add_class::<fit::PyFitCounts>()?;
+    m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::finish, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::tune, m)?)?;
     m.add("FORMAT_VERSION", mlmap::FORMAT_VERSION)?;
     Ok(())
 }

@@ -1,0 +1,762 @@
+//! Fitting from numpy arrays: `mlmap.fit`, `mlmap.tune`, and the mergeable statistics
+//! of the two passes (`FitStats`, `FitEdges`, `FitCounts`, `finish`).
+//!
+//! `fit` is the library's two passes over row ranges read by the rayon pool at the same
+//! time: pass (a) statistics per range, merged; the edges; pass (b) counts per range,
+//! merged; the table. The merges are exact, so the table's bytes do not depend on the
+//! split: they are those of `mlmap fit` on the same rows.
+
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
+use std::path::Path;
+
+use mlmap::host::dataset::{DataError, DataErrorKind, RowSource};
+use mlmap::host::fit::{
+    self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitParams, FitStats,
+    TrainingSet,
+};
+use mlmap::host::names::Named;
+use mlmap::host::tune::{self as host_tune, BayesGrid, Guards, Objective, TuneParams};
+use mlmap::host::DynTable;
+use mlmap::{EdgeMode, Head, UpperTail};
+use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyBytes, PyDict, PyType};
+use rayon::prelude::*;
+
+use crate::arrays::{self, value_error};
+use crate::errors::host_error;
+use crate::evaluate;
+use crate::source::{self, ArraySource};
+use crate::table::PyTable;
+
+/// Rows per range of a parallel pass: below it, one range.
+const MIN_ROWS_PER_PART: usize = 262_144;
+
+/// A fitting error as a Python exception, with the CLI's message (parameters named by
+/// their keyword instead of their flag).
+pub fn fit_error(e: &FitError) -> PyErr {
+    let msg = match e {
+        FitError::Param {
+            name,
+            value,
+            expected,
+        } => format!("{name} {value} is out of range: expected {expected}"),
+        _ => mlmap::host::fit_message(Path::new("logits"), e),
+    };
+    if e.is_bad_input() {
+        PyValueError::new_err(msg)
+    } else {
+        PyRuntimeError::new_err(msg)
+    }
+}
+
+/// The fit settings from keywords; `bayes` is `True` (the default head), `False` or
+/// `None` (no Bayes head), or a dict with `bins` and/or `lambda`.
+#[allow(clippy::too_many_arguments)]
+fn params(
+    bins_ml: usize,
+    lambda_ml: Option<f64>,
+    bins_map: usize,
+    lambda_map: Option<f64>,
+    edges: &str,
+    tail: &str,
+    bayes: BayesArg,
+) -> PyResult<FitParams> {
+    let d = FitParams::default();
+    let p = FitParams {
+        bins_ml,
+        lambda_ml: lambda_ml.map_or(d.lambda_ml, |v| v as f32),
+        bins_map,
+        lambda_map: lambda_map.map_or(d.lambda_map, |v| v as f32),
+        edges: EdgeMode::from_name(edges).map_err(|e| value_error(e.to_string()))?,
+        upper_tail: UpperTail::from_name(tail).map_err(|e| value_error(e.to_string()))?,
+        bayes: bayes.0,
+    };
+    p.validate().map_err(|e| fit_error(&e))?;
+    Ok(p)
+}
+
+/// The `bayes` keyword: `True` (the default head), `False` or `None` (no Bayes head),
+/// or a dict with `bins` and/or `lambda`.
+#[derive(Debug, Clone, Copy)]
+pub struct BayesArg(Option<BayesParams>);
+
+impl BayesArg {
+    /// The default: a Bayes head with its default settings.
+    const DEFAULT: Self = Self(Some(BayesParams {
+        bins: 22,
+        lambda: 1e-3,
+    }));
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for BayesArg {
+    type Error = PyErr;
+
+    fn extract(b: pyo3::Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if b.is_none() {
+            return Ok(Self(None));
+        }
+        if let Ok(flag) = b.cast::<PyBool>() {
+            return Ok(Self(flag.is_true().then(BayesParams::default)));
+        }
+        let d = b.cast::<PyDict>().map_err(|_| {
+            PyTypeError::new_err(
+                "bayes: expected True, False, None or a dict {\"bins\": .., \"lambda\": ..}",
+            )
+        })?;
+        let mut p = BayesParams::default();
+        for (key, value) in d.iter() {
+            match key.extract::<String>()?.as_str() {
+                "bins" => p.bins = value.extract()?,
+                "lambda" => p.lambda = value.extract::<f64>()? as f32,
+                other => {
+                    return Err(value_error(format!(
+                        "bayes: unknown key {other:?}; expected \"bins\" and \"lambda\""
+                    )))
+                }
+            }
+        }
+        Ok(Self(Some(p)))
+    }
+}
+
+/// Class names: the given ones (checked as a data file's header is), or `class0` ..
+/// `class{K-1}` as for an NPY directory without `classes.txt`.
+fn class_names(classes: Option<Vec<String>>, k: usize) -> PyResult<Vec<String>> {
+    let names = classes.unwrap_or_else(|| (0..k).map(|i| format!("class{i}")).collect());
+    if names.len() != k {
+        return Err(value_error(format!(
+            "classes: {} names given but the logits have {k} columns",
+            names.len()
+        )));
+    }
+    check_class_names(&names)?;
+    Ok(names)
+}
+
+/// The rules of a data file's class names (DESIGN §2, §6.15), with its messages.
+fn check_class_names(names: &[String]) -> PyResult<()> {
+    let refuse = |kind: DataErrorKind, name: Option<&str>| {
+        let e = DataError::new("classes", kind);
+        let e = match name {
+            Some(n) => e.in_column(n),
+            None => e,
+        };
+        Err(value_error(e.to_string()))
+    };
+    if names.len() < 2 || names.len() > usize::from(u16::MAX) {
+        return refuse(DataErrorKind::ClassCount { found: names.len() }, None);
+    }
+    for (i, name) in names.iter().enumerate() {
+        if name.is_empty() {
+            return refuse(DataErrorKind::EmptyColumnName { index: i + 1 }, None);
+        }
+        if name == "background" {
+            return refuse(DataErrorKind::ReservedClassName, Some(name));
+        }
+        if name.len() > mlmap::NAME_MAX {
+            return refuse(DataErrorKind::ClassNameTooLong { len: name.len() }, Some(name));
+        }
+        if names.get(..i).is_some_and(|seen| seen.contains(name)) {
+            return refuse(DataErrorKind::DuplicateColumn, Some(name));
+        }
+    }
+    Ok(())
+}
+
+/// The arrays of a fit, checked and held for one call.
+struct Held<'py> {
+    classes: Vec<String>,
+    logits: arrays::Logits<'py>,
+    labels: source::Labels<'py>,
+    objectness: arrays::Objectness<'py>,
+}
+
+impl<'py> Held<'py> {
+    fn new(
+        logits: &Bound<'py, PyAny>,
+        labels: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+        classes: Option<Vec<String>>,
+    ) -> PyResult<Self> {
+        let x = arrays::logits(logits, "logits", true)?;
+        let classes = class_names(classes, x.cols)?;
+        let labels = source::labels(labels, "labels", x.rows, x.cols)?;
+        let objectness = arrays::objectness(objectness, "objectness", x.rows)?;
+        Ok(Self {
+            classes,
+            logits: x,
+            labels,
+            objectness,
+        })
+    }
+
+    fn source(&self) -> ArraySource<'_> {
+        ArraySource::new(
+            &self.classes,
+            &self.logits,
+            Some(&self.labels),
+            &self.objectness,
+            "",
+        )
+    }
+}
+
+/// Ranges for a parallel pass over `src`.
+fn parts<'a>(src: &ArraySource<'a>) -> Vec<ArraySource<'a>> {
+    let threads = rayon::current_num_threads().max(1);
+    let n = (src.len() / MIN_ROWS_PER_PART).clamp(1, 4 * threads);
+    src.split(n)
+}
+
+/// The first error in range order (the lowest row), or every value.
+fn in_order<T, E>(results: Vec<Result<T, E>>) -> Result<Vec<T>, E> {
+    results.into_iter().collect()
+}
+
+/// Pass (a) over `src`, in parallel.
+fn stats_of(src: &ArraySource<'_>) -> Result<FitStats, FitError> {
+    let classes = src.classes().to_vec();
+    let each = parts(src)
+        .par_iter()
+        .map(|p| {
+            let mut s = FitStats::new(&classes);
+            p.for_each_row(|row| {
+                s.push(&row);
+                Ok::<(), FitError>(())
+            })?;
+            Ok::<FitStats, FitError>(s)
+        })
+        .collect();
+    let mut total = FitStats::new(&classes);
+    for s in in_order(each)? {
+        total.merge(&s)?;
+    }
+    Ok(total)
+}
+
+/// Why pass (b) stopped: bad data, or a value outside the edges.
+enum CountError {
+    Data(DataError),
+    Outside(u64),
+}
+
+impl From<DataError> for CountError {
+    fn from(e: DataError) -> Self {
+        Self::Data(e)
+    }
+}
+
+/// Pass (b) over `src`, in parallel.
+fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
+    let each = parts(src)
+        .par_iter()
+        .map(|p| {
+            let mut c = FitCounts::new(edges);
+            p.for_each_row(|row| {
+                if c.push(&row) {
+                    Ok(())
+                } else {
+                    Err(CountError::Outside(row.index))
+                }
+            })?;
+            Ok::<FitCounts, CountError>(c)
+        })
+        .collect();
+    let mut total = FitCounts::new(edges);
+    for c in in_order(each).map_err(|e| match e {
+        CountError::Data(e) => value_error(e.to_string()),
+        CountError::Outside(i) => value_error(format!(
+            "logits: row index {i}: a training value lies outside the edges; pass (b) needs \
+             the edges of statistics that include these rows"
+        )),
+    })? {
+        total.merge(&c).map_err(|e| fit_error(&e))?;
+    }
+    Ok(total)
+}
+
+/// Fits a table from numpy arrays, as `mlmap fit` does from a file (the same bytes on
+/// the same rows).
+///
+/// `logits` is `(N, K)` float32 or float64 in any order; `labels` `(N,)` integers,
+/// `0..K-1` a class and `-1` background (used by the Bayes head; the paper's heads skip
+/// those rows); `objectness` is checked but does not enter the fit. `classes` names the
+/// columns (default `class0` ..). `bayes=True` fits the Bayes head with its defaults,
+/// `bayes={"bins": 22, "lambda": 1e-3}` with others, `None` or `False` leaves it out.
+#[pyfunction]
+#[pyo3(signature = (logits, labels, objectness=None, *, classes=None, bins_ml=22,
+                    lambda_ml=None, bins_map=17, lambda_map=None, edges="linspace",
+                    tail="zero", bayes=BayesArg::DEFAULT))]
+#[allow(clippy::too_many_arguments)]
+pub fn fit<'py>(
+    py: Python<'py>,
+    logits: &Bound<'py, PyAny>,
+    labels: &Bound<'py, PyAny>,
+    objectness: Option<&Bound<'py, PyAny>>,
+    classes: Option<Vec<String>>,
+    bins_ml: usize,
+    lambda_ml: Option<f64>,
+    bins_map: usize,
+    lambda_map: Option<f64>,
+    edges: &str,
+    tail: &str,
+    bayes: BayesArg,
+) -> PyResult<PyTable> {
+    let p = params(bins_ml, lambda_ml, bins_map, lambda_map, edges, tail, bayes)?;
+    let held = Held::new(logits, labels, objectness, classes)?;
+    let src = held.source();
+    let table = py.detach(|| -> PyResult<DynTable> {
+        let stats = stats_of(&src).map_err(|e| fit_error(&e))?;
+        let edges = stats.edges(&p).map_err(|e| fit_error(&e))?;
+        let counts = counts_of(&src, &edges)?;
+        host_fit::finish(&stats, &counts).map_err(|e| fit_error(&e))
+    })?;
+    PyTable::new(table)
+}
+
+/// Adds `other` to `acc` (`0`, the start of `sum()`, is the empty statistics).
+macro_rules! mergeable {
+    ($py_ty:ident, $inner:ty, $what:literal) => {
+        #[pymethods]
+        impl $py_ty {
+            /// The merge of both (exact: any order and grouping gives the same result).
+            fn merge(&self, other: &Bound<'_, $py_ty>) -> PyResult<Self> {
+                let mut out = self.inner.clone();
+                out.merge(&other.get().inner).map_err(|e| fit_error(&e))?;
+                Ok(Self { inner: out })
+            }
+
+            fn __add__(&self, other: &Bound<'_, PyAny>) -> PyResult<Self> {
+                match other.cast::<$py_ty>() {
+                    Ok(o) => self.merge(o),
+                    Err(_) if is_zero(other) => Ok(Self {
+                        inner: self.inner.clone(),
+                    }),
+                    Err(_) => Err(PyTypeError::new_err(concat!(
+                        "only ",
+                        $what,
+                        " add to ",
+                        $what
+                    ))),
+                }
+            }
+
+            fn __radd__(&self, other: &Bound<'_, PyAny>) -> PyResult<Self> {
+                self.__add__(other)
+            }
+
+            /// The versioned bytes (they cross process and machine boundaries).
+            fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+                PyBytes::new(py, &self.inner.to_bytes())
+            }
+
+            /// Reads [`to_bytes`]'s output; a corrupt, truncated or newer input raises
+            /// `ValueError`.
+            #[staticmethod]
+            fn from_bytes(data: pyo3::pybacked::PyBackedBytes) -> PyResult<Self> {
+                let inner = <$inner>::from_bytes(&data).map_err(|e| fit_error(&e))?;
+                Ok(Self { inner })
+            }
+
+            fn __reduce__<'py>(
+                slf: &Bound<'py, Self>,
+            ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+                let from_bytes = slf.get_type().getattr("from_bytes")?;
+                Ok((from_bytes, (slf.get().to_bytes(slf.py()),)))
+            }
+
+            fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+                other
+                    .cast::<$py_ty>()
+                    .is_ok_and(|o| o.get().inner.to_bytes() == self.inner.to_bytes())
+            }
+
+            fn __hash__(&self) -> u64 {
+                let mut h = DefaultHasher::new();
+                self.inner.to_bytes().hash(&mut h);
+                h.finish()
+            }
+        }
+    };
+}
+
+fn is_zero(obj: &Bound<'_, PyAny>) -> bool {
+    obj.extract::<i64>().is_ok_and(|v| v == 0)
+}
+
+/// Pass (a) of a fit over some rows: per class the exact count, extremes and sums of
+/// its training values, and the Bayes head's extremes and category rows. Shards'
+/// statistics merge exactly (`merge`, `+`, `sum()`), pickle through versioned bytes,
+/// and give the `edges` of pass (b).
+#[pyclass(module = "mlmap", frozen, name = "FitStats")]
+pub struct PyFitStats {
+    inner: FitStats,
+}
+
+mergeable!(PyFitStats, FitStats, "FitStats");
+
+#[pymethods]
+impl PyFitStats {
+    /// The statistics of the rows of `logits`/`labels` (as `mlmap.fit` takes them).
+    #[new]
+    #[pyo3(signature = (logits, labels, objectness=None, *, classes=None))]
+    fn py_new<'py>(
+        py: Python<'py>,
+        logits: &Bound<'py, PyAny>,
+        labels: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+        classes: Option<Vec<String>>,
+    ) -> PyResult<Self> {
+        let held = Held::new(logits, labels, objectness, classes)?;
+        let src = held.source();
+        let inner = py.detach(|| stats_of(&src)).map_err(|e| fit_error(&e))?;
+        Ok(Self { inner })
+    }
+
+    /// The statistics of no rows (the neutral element of `merge`).
+    #[classmethod]
+    fn empty(_cls: &Bound<'_, PyType>, classes: Vec<String>) -> PyResult<Self> {
+        let k = classes.len();
+        let classes = class_names(Some(classes), k)?;
+        Ok(Self {
+            inner: FitStats::new(&classes),
+        })
+    }
+
+    /// Class names.
+    #[getter]
+    fn classes(&self) -> Vec<String> {
+        self.inner.classes().to_vec()
+    }
+
+    /// Rows seen (labelled or not).
+    #[getter]
+    fn rows(&self) -> u64 {
+        self.inner.rows()
+    }
+
+    /// Training values per class (rows labelled with it).
+    #[getter]
+    fn class_rows(&self) -> Vec<u64> {
+        self.inner.moments().iter().map(|m| m.count()).collect()
+    }
+
+    /// The edges of every histogram for a fit with these settings (the keywords of
+    /// `mlmap.fit`): what pass (b) counts against.
+    #[pyo3(signature = (*, bins_ml=22, lambda_ml=None, bins_map=17, lambda_map=None,
+                        edges="linspace", tail="zero", bayes=BayesArg::DEFAULT))]
+    #[allow(clippy::too_many_arguments)]
+    fn edges(
+        &self,
+        bins_ml: usize,
+        lambda_ml: Option<f64>,
+        bins_map: usize,
+        lambda_map: Option<f64>,
+        edges: &str,
+        tail: &str,
+        bayes: BayesArg,
+    ) -> PyResult<PyFitEdges> {
+        let p = params(bins_ml, lambda_ml, bins_map, lambda_map, edges, tail, bayes)?;
+        let inner = self.inner.edges(&p).map_err(|e| fit_error(&e))?;
+        Ok(PyFitEdges { inner })
+    }
+
+    /// The table of these statistics and the merged counts of pass (b).
+    fn finish(&self, counts: &Bound<'_, PyFitCounts>) -> PyResult<PyTable> {
+        finish(self, counts)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "FitStats(classes={:?}, rows={}, class_rows={:?})",
+            self.inner.classes(),
+            self.inner.rows(),
+            self.class_rows()
+        )
+    }
+}
+
+/// The edges of every histogram (ML and MAP per class, Bayes per logit) and the fit
+/// settings: what pass (b) counts against. From `FitStats.edges(...)`; pickles.
+#[pyclass(module = "mlmap", frozen, name = "FitEdges")]
+pub struct PyFitEdges {
+    inner: FitEdges,
+}
+
+#[pymethods]
+impl PyFitEdges {
+    /// Class names.
+    #[getter]
+    fn classes(&self) -> Vec<String> {
+        self.inner.classes().to_vec()
+    }
+
+    /// The versioned bytes.
+    fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.inner.to_bytes())
+    }
+
+    /// Reads `to_bytes`'s output.
+    #[staticmethod]
+    fn from_bytes(data: pyo3::pybacked::PyBackedBytes) -> PyResult<Self> {
+        let inner = FitEdges::from_bytes(&data).map_err(|e| fit_error(&e))?;
+        Ok(Self { inner })
+    }
+
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let from_bytes = slf.get_type().getattr("from_bytes")?;
+        Ok((from_bytes, (slf.get().to_bytes(slf.py()),)))
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<PyFitEdges>()
+            .is_ok_and(|o| o.get().inner == self.inner)
+    }
+}
+
+/// Pass (b) of a fit over some rows: the bin counts of every head over given edges.
+/// Shards' counts merge by addition (`merge`, `+`, `sum()`) and pickle.
+#[pyclass(module = "mlmap", frozen, name = "FitCounts")]
+pub struct PyFitCounts {
+    inner: FitCounts,
+}
+
+mergeable!(PyFitCounts, FitCounts, "FitCounts");
+
+#[pymethods]
+impl PyFitCounts {
+    /// The counts of the rows of `logits`/`labels` over `edges`.
+    #[new]
+    #[pyo3(signature = (edges, logits, labels, objectness=None))]
+    fn py_new<'py>(
+        py: Python<'py>,
+        edges: &Bound<'py, PyFitEdges>,
+        logits: &Bound<'py, PyAny>,
+        labels: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Self> {
+        let edges = &edges.get().inner;
+        let held = Held::new(logits, labels, objectness, Some(edges.classes().to_vec()))?;
+        let src = held.source();
+        let inner = py.detach(|| counts_of(&src, edges))?;
+        Ok(Self { inner })
+    }
+
+    /// No counts over `edges` (the neutral element of `merge`).
+    #[classmethod]
+    fn empty(_cls: &Bound<'_, PyType>, edges: &Bound<'_, PyFitEdges>) -> Self {
+        Self {
+            inner: FitCounts::new(&edges.get().inner),
+        }
+    }
+
+    /// Rows counted.
+    #[getter]
+    fn rows(&self) -> u64 {
+        self.inner.rows()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "FitCounts(classes={:?}, rows={})",
+            self.inner.edges().classes(),
+            self.inner.rows()
+        )
+    }
+}
+
+/// The table of merged statistics (pass (a)) and merged counts (pass (b)) of the same
+/// rows: the bytes `mlmap.fit` writes on all of them at once.
+#[pyfunction]
+pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<PyTable> {
+    let table = host_fit::finish(&stats.inner, &counts.get().inner).map_err(|e| fit_error(&e))?;
+    PyTable::new(table)
+}
+
+/// Searches bins and lambdas of every head on validation data, as `mlmap tune` does;
+/// returns `(table, report)`, the report a dict as `mlmap tune --format json` (without
+/// the table's path).
+#[pyfunction]
+#[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, classes=None,
+                    objective="ece", bins_ml=None, bins_map=None, bins_bayes=None,
+                    bayes=true, lambda_min=1e-8, lambda_max=1e-1, lambdas_per_decade=3,
+                    lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
+                    max_map_loss=0.01, edges="linspace", tail="zero", top=5))]
+#[allow(clippy::too_many_arguments)]
+pub fn tune<'py>(
+    py: Python<'py>,
+    logits: &Bound<'py, PyAny>,
+    labels: &Bound<'py, PyAny>,
+    val: &Bound<'py, PyAny>,
+    objectness: Option<&Bound<'py, PyAny>>,
+    ood: Option<&Bound<'py, PyAny>>,
+    classes: Option<Vec<String>>,
+    objective: &str,
+    bins_ml: Option<Vec<usize>>,
+    bins_map: Option<Vec<usize>>,
+    bins_bayes: Option<Vec<usize>>,
+    bayes: bool,
+    lambda_min: f64,
+    lambda_max: f64,
+    lambdas_per_decade: usize,
+    lambda_bayes_min: Option<f64>,
+    lambda_bayes_max: Option<f64>,
+    max_accuracy_loss: f64,
+    max_map_loss: f64,
+    edges: &str,
+    tail: &str,
+    top: usize,
+) -> PyResult<(PyTable, Bound<'py, PyDict>)> {
+    let grid = |b: Option<Vec<usize>>, what: &str| -> PyResult<Vec<usize>> {
+        let b = b.unwrap_or_else(|| (4..=40).collect());
+        if b.is_empty() || b.iter().any(|&n| n == 0 || n > usize::from(u16::MAX)) {
+            return Err(value_error(format!(
+                "{what}: bin counts must be in 1..=65535, at least one"
+            )));
+        }
+        Ok(b)
+    };
+    let lambdas = host_tune::lambda_grid(lambda_min, lambda_max, lambdas_per_decade)
+        .map_err(|e| value_error(format!("lambda_min/lambda_max: {e}")))?;
+    let bayes_grid = if bayes {
+        let lambdas = host_tune::bayes_lambda_grid(
+            lambda_bayes_min.unwrap_or(lambda_min),
+            lambda_bayes_max.unwrap_or(lambda_max),
+            lambdas_per_decade,
+        )
+        .map_err(|e| value_error(format!("lambda_bayes_min/lambda_bayes_max: {e}")))?;
+        Some(BayesGrid {
+            bins: grid(bins_bayes, "bins_bayes")?,
+            lambdas,
+        })
+    } else {
+        None
+    };
+    let guards = Guards {
+        max_accuracy_loss,
+        max_map_loss,
+    };
+    guards
+        .validate()
+        .map_err(|e| value_error(e.replace("--max-accuracy-loss", "max_accuracy_loss").replace("--max-map-loss", "max_map_loss")))?;
+    let params = TuneParams {
+        bins: vec![
+            (Head::Ml, grid(bins_ml, "bins_ml")?),
+            (Head::Map, grid(bins_map, "bins_map")?),
+        ],
+        lambdas,
+        bayes: bayes_grid,
+        objective: Objective::from_name(objective).map_err(|e| value_error(e.to_string()))?,
+        guards,
+        edges: EdgeMode::from_name(edges).map_err(|e| value_error(e.to_string()))?,
+        tail: UpperTail::from_name(tail).map_err(|e| value_error(e.to_string()))?,
+        detail: top,
+    };
+    let held = Held::new(logits, labels, objectness, classes)?;
+    let src = held.source();
+    let names = held.classes.clone();
+    let val = evaluate::data_set(&names, val, "val")?;
+    let ood = ood
+        .filter(|o| !o.is_none())
+        .map(|o| evaluate::data_set(&names, o, "ood"))
+        .transpose()?;
+    let (val_path, ood_path) = (Path::new("val"), Path::new("ood"));
+    let tuned = py.detach(|| -> PyResult<_> {
+        let train = TrainingSet::read(&src).map_err(|e| fit_error(&e))?;
+        host_tune::tune(
+            &train,
+            &val,
+            val_path,
+            ood.as_ref().map(|o| (o, ood_path)),
+            &params,
+            |_, _| {},
+        )
+        .map_err(|e| host_error(&e))
+    })?;
+    let report = tune_report(py, &tuned, &params, top)?;
+    Ok((PyTable::new(tuned.table)?, report))
+}
+
+/// The keys of the comparison of `tune`, as the CLI's JSON report names them.
+const COMPARED: [&str; 6] = ["ece", "nll", "brier", "accuracy", "mean_ap", "auroc"];
+
+fn compared(m: &mlmap::host::metrics::Metrics, key: &str) -> Option<f64> {
+    match key {
+        "ece" => Some(m.ece),
+        "nll" => m.nll,
+        "brier" => Some(m.brier),
+        "accuracy" => m.accuracy,
+        "mean_ap" => m.mean_ap(),
+        "auroc" => m.auroc,
+        "ood_mean" => m.ood.map(|o| o.ood_mean),
+        _ => None,
+    }
+    .filter(|v| v.is_finite())
+}
+
+/// `tune`'s report as a dict with the keys of `mlmap tune --format json`.
+fn tune_report<'py>(
+    py: Python<'py>,
+    tuned: &host_tune::Tuned,
+    params: &TuneParams,
+    top: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    out.set_item("objective", params.objective.name())?;
+    let counts = PyDict::new(py);
+    for h in &tuned.result.heads {
+        counts.set_item(h.head.name(), params.candidates(h.head))?;
+    }
+    out.set_item("candidates", counts)?;
+    for h in &tuned.result.heads {
+        let list = pyo3::types::PyList::empty(py);
+        for (i, c) in h.candidates.iter().take(top).enumerate() {
+            let d = PyDict::new(py);
+            d.set_item("bins", c.bins)?;
+            d.set_item("lambda", c.lambda)?;
+            d.set_item("objective", Some(c.objective).filter(|v| v.is_finite()))?;
+            d.set_item("ece", c.ece)?;
+            d.set_item("nll", c.nll)?;
+            d.set_item("brier", c.brier)?;
+            d.set_item("accuracy", c.accuracy)?;
+            d.set_item("mean_ap", c.mean_ap)?;
+            d.set_item("within_guards", c.eligible())?;
+            d.set_item("rank", i + 1)?;
+            list.append(d)?;
+        }
+        out.set_item(h.head.name(), list)?;
+    }
+    let c = &tuned.comparison;
+    let methods = PyDict::new(py);
+    for m in &c.methods {
+        let d = PyDict::new(py);
+        let mut keys = COMPARED.to_vec();
+        if c.ood_rows.is_some() {
+            keys.push("ood_mean");
+        }
+        for key in keys {
+            d.set_item(key, compared(&m.metrics, key))?;
+        }
+        if let Some(ch) = &m.chosen {
+            d.set_item("bins", ch.bins)?;
+            d.set_item("lambda", ch.lambda)?;
+            d.set_item("within_guards", m.excess == 0.0)?;
+        }
+        methods.set_item(m.method.name(), d)?;
+    }
+    let v = PyDict::new(py);
+    v.set_item("rows", c.rows)?;
+    v.set_item("ood_rows", c.ood_rows)?;
+    v.set_item("temperature", c.temperature)?;
+    v.set_item("max_accuracy_loss", params.guards.max_accuracy_loss)?;
+    v.set_item("max_map_loss", params.guards.max_map_loss)?;
+    v.set_item("methods", methods)?;
+    v.set_item("best", c.best.map(|m| m.name()))?;
+    out.set_item("validation", v)?;
+    Ok(out)
+}
