@@ -51,18 +51,21 @@
 mod bayes;
 mod binpicker;
 mod error;
+mod exact;
+mod shards;
 mod stats;
 
 use std::path::{Path, PathBuf};
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use crate::host::dataset::{DataSource, Label, Row};
+use crate::host::dataset::{Label, Row, RowSource};
 use crate::host::DynTable;
-use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
+use crate::{Axis, ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
 
 pub use bayes::{BayesCounts, BayesMoments, BayesParams};
 pub use error::{warnings, FitError, FitWarning};
+pub use shards::{finish, FitCounts, FitEdges, FitStats, STATS_FORMAT_VERSION};
 pub use stats::{ClassHistogram, ClassMoments};
 
 use stats::BinCounter;
@@ -167,6 +170,7 @@ impl FitParams {
 }
 
 /// The value `v_c` a row contributes, with its class: `x_c` of a row labelled `c`.
+#[inline]
 fn class_value(row: &Row<'_>) -> Option<(usize, f64)> {
     match row.label {
         Label::Class(c) => row.logits.get(c).map(|&x| (c, x)),
@@ -175,7 +179,7 @@ fn class_value(row: &Row<'_>) -> Option<(usize, f64)> {
 }
 
 /// Refuses unlabelled sources.
-fn require_labels(source: &DataSource) -> Result<(), FitError> {
+fn require_labels(source: &impl RowSource) -> Result<(), FitError> {
     if source.has_labels() {
         Ok(())
     } else {
@@ -202,12 +206,16 @@ fn require_rows(path: &Path, moments: &[ClassMoments]) -> Result<(), FitError> {
     }
 }
 
-fn empty_moments(source: &DataSource) -> Vec<ClassMoments> {
-    source
-        .classes()
-        .iter()
-        .map(|c| ClassMoments::new(c.as_str()))
-        .collect()
+/// Pass (a) over a whole source: its [`FitStats`], checked for labels and rows.
+fn pass_a(source: &impl RowSource) -> Result<FitStats, FitError> {
+    require_labels(source)?;
+    let mut stats = FitStats::new(source.classes());
+    source.for_each_row(|row| {
+        stats.push(&row);
+        Ok::<(), FitError>(())
+    })?;
+    require_rows(source.path(), stats.moments())?;
+    Ok(stats)
 }
 
 /// Pass 1 of [`fit`]: the moments of every class, in one streaming pass.
@@ -216,63 +224,42 @@ fn empty_moments(source: &DataSource) -> Vec<ClassMoments> {
 ///
 /// [`FitError::Data`] for unreadable data, [`FitError::NoLabels`] for unlabelled data,
 /// [`FitError::EmptyClasses`] when a class has no training rows.
-pub fn class_moments(source: &DataSource) -> Result<Vec<ClassMoments>, FitError> {
-    Ok(pass_1(source, false)?.0)
+pub fn class_moments(source: &impl RowSource) -> Result<Vec<ClassMoments>, FitError> {
+    Ok(pass_a(source)?.moments().to_vec())
 }
 
-/// Pass 1: the moments of every class and, when `bayes`, the Bayes head's extremes and
-/// category rows.
-fn pass_1(
-    source: &DataSource,
-    bayes: bool,
-) -> Result<(Vec<ClassMoments>, Option<BayesMoments>), FitError> {
-    require_labels(source)?;
-    let mut moments = empty_moments(source);
-    let mut bayes = bayes.then(|| BayesMoments::new(source.classes()));
-    source.for_each_row(|row| {
-        if let Some((c, x)) = class_value(&row) {
-            if let Some(m) = moments.get_mut(c) {
-                m.push(x);
-            }
-        }
-        if let Some(b) = &mut bayes {
-            b.push(&row);
-        }
-        Ok::<(), FitError>(())
-    })?;
-    require_rows(source.path(), &moments)?;
-    Ok((moments, bayes))
-}
-
-/// A counter over the histogram range of class `m`.
-fn counter_for(m: &ClassMoments, bins: usize, edges: EdgeMode) -> Result<BinCounter, FitError> {
-    if !((m.min() as f32).is_finite() && (m.max() as f32).is_finite()) {
+/// The axis of a histogram of `bins` bins over values in `[min, max]` (named `name` in
+/// errors), placed by `edges`.
+pub(crate) fn checked_axis(
+    name: &str,
+    min: f64,
+    max: f64,
+    bins: usize,
+    edges: EdgeMode,
+) -> Result<Axis, FitError> {
+    if !((min as f32).is_finite() && (max as f32).is_finite()) {
         return Err(FitError::OutOfF32 {
-            class: m.name().to_string(),
+            class: name.to_string(),
         });
     }
-    let (lo, hi) = m.range(bins, edges);
-    BinCounter::new(lo, hi, bins).ok_or_else(|| FitError::Edges {
-        class: m.name().to_string(),
+    let (lo, hi) = stats::range(min, max, bins, edges);
+    Axis::new(lo, hi, bins).map_err(|_| FitError::Edges {
+        class: name.to_string(),
         bins,
         lo,
         hi,
     })
 }
 
-fn counters(
-    moments: &[ClassMoments],
-    bins: usize,
-    edges: EdgeMode,
-) -> Result<Vec<BinCounter>, FitError> {
-    moments
-        .iter()
-        .map(|m| counter_for(m, bins, edges))
-        .collect()
+/// A counter over the histogram range of class `m`.
+fn counter_for(m: &ClassMoments, bins: usize, edges: EdgeMode) -> Result<BinCounter, FitError> {
+    checked_axis(m.name(), m.min(), m.max(), bins, edges).map(BinCounter::from_axis)
 }
 
-/// Fits a table from `source` in two streaming passes (memory independent of the row
-/// count).
+/// Fits a table from `source` (a file, or rows in memory) in two streaming passes
+/// (memory independent of the row count): pass (a) [`FitStats`], their
+/// [`FitEdges`], pass (b) [`FitCounts`], and [`finish`], the code path of a fit
+/// merged from shards.
 ///
 /// # Errors
 ///
@@ -280,50 +267,26 @@ fn counters(
 /// [`FitError::NoLabels`] and [`FitError::EmptyClasses`] as [`class_moments`];
 /// [`FitError::Edges`] or [`FitError::OutOfF32`] for classes whose statistics a table
 /// cannot hold; [`FitError::Changed`] if the input changes between the passes.
-pub fn fit(source: &DataSource, params: &FitParams) -> Result<DynTable, FitError> {
+pub fn fit(source: &impl RowSource, params: &FitParams) -> Result<DynTable, FitError> {
     params.validate()?;
-    let (moments, bayes_moments) = pass_1(source, params.bayes.is_some())?;
-    let mut ml = counters(&moments, params.bins_ml, params.edges)?;
-    let mut map = counters(&moments, params.bins_map, params.edges)?;
-    let mut bayes = match (&bayes_moments, &params.bayes) {
-        (Some(m), Some(p)) => Some(m.counters(p.bins)?),
-        _ => None,
-    };
+    let stats = pass_a(source)?;
+    let edges = stats.edges(params)?;
+    let mut counts = FitCounts::new(&edges);
     let mut outside = false;
     source.for_each_row(|row| {
-        if let Some((c, x)) = class_value(&row) {
-            if let (Some(a), Some(b)) = (ml.get_mut(c), map.get_mut(c)) {
-                let x = x as f32;
-                let (in_a, in_b) = (a.add(x), b.add(x));
-                outside |= !(in_a && in_b);
-            }
-        }
-        if let Some(b) = &mut bayes {
-            outside |= !b.add(&row);
-        }
+        outside |= !counts.push(&row);
         Ok::<(), FitError>(())
     })?;
-    let ml: Vec<ClassHistogram> = ml.into_iter().map(BinCounter::finish).collect();
-    let map: Vec<ClassHistogram> = map.into_iter().map(BinCounter::finish).collect();
-    let same_rows = moments
-        .iter()
-        .zip(&ml)
-        .zip(&map)
-        .all(|((m, a), b)| a.total() == m.count() && b.total() == m.count());
     let changed = || FitError::Changed {
         path: source.path().to_path_buf(),
     };
-    if outside || !same_rows {
+    if outside {
         return Err(changed());
     }
-    let table = build_table(&moments, &ml, &map, params.settings())?;
-    match (bayes, params.bayes) {
-        (Some(counters), Some(p)) => {
-            let counts = counters.finish().ok_or_else(changed)?;
-            with_bayes(table, &counts, p.lambda)
-        }
-        _ => Ok(table),
-    }
+    finish(&stats, &counts).map_err(|e| match e {
+        FitError::RowsDiffer { .. } | FitError::EdgesDiffer => changed(),
+        e => e,
+    })
 }
 
 /// `table` with the Bayes head of `counts` smoothed by `lambda`.
@@ -406,9 +369,13 @@ impl TrainingSet {
     /// # Errors
     ///
     /// As [`class_moments`].
-    pub fn read(source: &DataSource) -> Result<Self, FitError> {
+    pub fn read(source: &impl RowSource) -> Result<Self, FitError> {
         require_labels(source)?;
-        let mut moments = empty_moments(source);
+        let mut moments: Vec<ClassMoments> = source
+            .classes()
+            .iter()
+            .map(|c| ClassMoments::new(c.as_str()))
+            .collect();
         let mut values: Vec<Vec<f32>> = std::vec![Vec::new(); moments.len()];
         let mut bayes = BayesMoments::new(source.classes());
         let (mut logits, mut categories) = (Vec::new(), Vec::new());
@@ -469,9 +436,11 @@ impl TrainingSet {
             };
             counters.add(&row);
         }
-        counters.finish().ok_or(FitError::Changed {
-            path: self.path.clone(),
-        })
+        counters
+            .finish(self.bayes.category_rows())
+            .ok_or(FitError::Changed {
+                path: self.path.clone(),
+            })
     }
 
     /// The training input this set was read from.
