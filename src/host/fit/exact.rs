@@ -332,12 +332,14 @@ mod tests {
 
     #[test]
     fn carries_pass_up_after_many_additions() {
-        let mut s = Fixed::<VALUE_CHUNKS>::default();
-        s.room = 3;
+        let mut s = Fixed::<VALUE_CHUNKS> {
+            room: 3,
+            ..Fixed::default()
+        };
         for _ in 0..10 {
             s.add_mantissa(false, (1 << 53) - 1, 31);
         }
-        let want = BigInt::from(10) * BigInt::from((1u64 << 53) - 1) << 31u32;
+        let want = (BigInt::from(10) * BigInt::from((1u64 << 53) - 1)) << 31u32;
         assert_eq!(s.to_bigint(), want);
     }
 

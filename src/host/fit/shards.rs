@@ -238,7 +238,7 @@ impl FitStats {
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FitError> {
         let w: StatsWire = decode(MAGIC_STATS, bytes)?;
         let bad = |what: &str| format_error(std::format!("inconsistent statistics: {what}"));
-        let params = w.params.map(ParamsWire::to_params).transpose()?;
+        let params = w.params.map(ParamsWire::into_params).transpose()?;
         if w.moments.len() != w.classes.len() {
             return Err(bad("one entry per class expected"));
         }
@@ -330,7 +330,7 @@ impl FitEdges {
     }
 
     fn from_wire(w: EdgesWire) -> Result<Self, FitError> {
-        let params = w.params.to_params()?;
+        let params = w.params.into_params()?;
         let k = w.classes.len();
         let bad = |what: &str| format_error(std::format!("inconsistent edges: {what}"));
         let axes = |ranges: &[(f32, f32)], bins| {
@@ -671,7 +671,7 @@ impl From<&FitParams> for ParamsWire {
 }
 
 impl ParamsWire {
-    fn to_params(self) -> Result<FitParams, FitError> {
+    fn into_params(self) -> Result<FitParams, FitError> {
         let bad = || format_error("invalid fit settings".to_string());
         let bins = |b: u64| usize::try_from(b).map_err(|_| bad());
         let params = FitParams {
