@@ -18,7 +18,10 @@ use mlmap::host::fit::{finish, ClassMoments, FitCounts, FitParams, FitStats};
 
 fn main() -> ExitCode {
     let mut args = std::env::args().skip(1);
-    let rows: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(2_000_000);
+    let rows: usize = args
+        .next()
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(2_000_000);
     let k: usize = args.next().and_then(|a| a.parse().ok()).unwrap_or(3);
     if k < 2 || rows == 0 {
         eprintln!("usage: stats_timing [ROWS >= 1] [CLASSES >= 2]");
@@ -49,14 +52,30 @@ fn main() -> ExitCode {
     let classes: Vec<String> = (0..k).map(|c| format!("class{c}")).collect();
     let params = FitParams::default();
 
-    // One class's exact moments over every logit: the cost of one value.
-    let t = Instant::now();
-    let mut moments = ClassMoments::new("all");
-    for &x in &logits {
-        moments.push(x);
+    // One class's exact moments over every logit: the cost of one value (the best of 5
+    // runs, as the machine may be busy).
+    let mut push_s = f64::INFINITY;
+    for _ in 0..5 {
+        let t = Instant::now();
+        let mut moments = ClassMoments::new("all");
+        for &x in black_box(&logits) {
+            moments.push(x);
+        }
+        push_s = push_s.min(t.elapsed().as_secs_f64());
+        black_box(&moments);
     }
-    let push_s = t.elapsed().as_secs_f64();
-    black_box(&moments);
+    // The plain f64 sum and sum of squares, for scale.
+    let mut plain_s = f64::INFINITY;
+    for _ in 0..5 {
+        let t = Instant::now();
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for &x in black_box(&logits) {
+            s1 += x;
+            s2 += x * x;
+        }
+        plain_s = plain_s.min(t.elapsed().as_secs_f64());
+        black_box((s1, s2));
+    }
 
     let t = Instant::now();
     let mut stats = FitStats::new(&classes);
@@ -98,9 +117,10 @@ fn main() -> ExitCode {
     }
     let ns = |s: f64, n: usize| s * 1e9 / n as f64;
     println!(
-        "rows={rows} classes={k} moments_push_ns_per_value={:.2} pass_a_ns_per_row={:.1} \
-         pass_b_ns_per_row={:.1} merge_us={:.1} finish_us={:.1}",
+        "rows={rows} classes={k} moments_push_ns_per_value={:.2} plain_f64_sums_ns_per_value={:.2} \
+         pass_a_ns_per_row={:.1} pass_b_ns_per_row={:.1} merge_us={:.1} finish_us={:.1}",
         ns(push_s, rows * k),
+        ns(plain_s, rows * k),
         ns(pass_a, rows),
         ns(pass_b, rows),
         merge_s * 1e6,

@@ -68,7 +68,7 @@ impl<const N: usize> Default for Fixed<N> {
 }
 
 impl<const N: usize> Fixed<N> {
-    /// Adds (or subtracts, when `negative`) the integer `v < 2^106` at bit `pos`.
+    /// Adds (or subtracts, when `negative`) the integer `v` at bit `pos`.
     ///
     /// `pos` must leave the shifted value inside the accumulator (the callers' bit
     /// budgets above); words past the last chunk are dropped, never written out of
@@ -81,7 +81,7 @@ impl<const N: usize> Fixed<N> {
         self.room -= 1;
         let shift = pos & 31;
         let low = v << shift;
-        // The bits shifted past bit 127 (v < 2^106, so at most 9 of them).
+        // The bits shifted past bit 127 (at most 31 of them).
         let top = v.checked_shr(128 - shift).unwrap_or(0) & u128::from(u32::MAX);
         let words = [
             low as u32,
@@ -92,27 +92,6 @@ impl<const N: usize> Fixed<N> {
         ];
         let start = (pos >> 5) as usize;
         let chunks = self.chunks.iter_mut().skip(start);
-        if negative {
-            for (c, w) in chunks.zip(words) {
-                *c -= i64::from(w);
-            }
-        } else {
-            for (c, w) in chunks.zip(words) {
-                *c += i64::from(w);
-            }
-        }
-    }
-
-    /// Adds a 53-bit mantissa at bit `pos` (three words: the cheap path for values).
-    #[inline]
-    pub(crate) fn add_mantissa(&mut self, negative: bool, m: u64, pos: u32) {
-        if self.room == 0 {
-            self.normalize();
-        }
-        self.room -= 1;
-        let low = u128::from(m) << (pos & 31);
-        let words = [low as u32, (low >> 32) as u32, (low >> 64) as u32];
-        let chunks = self.chunks.iter_mut().skip((pos >> 5) as usize);
         if negative {
             for (c, w) in chunks.zip(words) {
                 *c -= i64::from(w);
@@ -206,6 +185,132 @@ impl<const N: usize> PartialEq for Fixed<N> {
     }
 }
 
+/// Value buckets: one per 32-bit chunk position of a value's mantissa.
+const VALUE_BUCKETS: usize = 64;
+/// Square buckets: one per 8 positions of a value (16 bits of its square).
+const SQUARE_BUCKETS: usize = 256;
+/// Additions a square bucket takes before it must be flushed: each adds less than
+/// 2^120 (a 106-bit square shifted by at most 14 bits), so 256 stay below 2^128.
+const BUCKET_ROOM: u32 = 256;
+
+/// The exact sum and sum of squares of `f64` values: the fast path of
+/// [`ClassMoments`](super::ClassMoments).
+///
+/// A value is added with one 128-bit addition to a bucket chosen by its exponent (its
+/// mantissa pre-shifted within the bucket), its square with another; every 256 values
+/// the buckets touched are flushed into the [`Fixed`] accumulators. Values of a class
+/// have few distinct exponents, so few buckets are touched.
+#[derive(Debug, Clone)]
+pub(crate) struct Sums {
+    /// Bucket `i`: a signed sum of mantissas shifted by `pos & 31`, at bit `32 i`.
+    values: [i128; VALUE_BUCKETS],
+    /// Bucket `i`: a sum of squared mantissas shifted by `2 (pos & 7)`, at bit `16 i`.
+    squares: [u128; SQUARE_BUCKETS],
+    /// Range of buckets touched since the last flush (`lo > hi` when none).
+    touched_lo: usize,
+    touched_hi: usize,
+    /// Values added since the last flush.
+    pending: u32,
+    sum: Fixed<VALUE_CHUNKS>,
+    sum_sq: Fixed<SQUARE_CHUNKS>,
+}
+
+impl Default for Sums {
+    fn default() -> Self {
+        Self {
+            values: [0; VALUE_BUCKETS],
+            squares: [0; SQUARE_BUCKETS],
+            touched_lo: SQUARE_BUCKETS,
+            touched_hi: 0,
+            pending: 0,
+            sum: Fixed::default(),
+            sum_sq: Fixed::default(),
+        }
+    }
+}
+
+impl Sums {
+    /// Adds a finite value's parts ([`split`]).
+    #[inline]
+    pub(crate) fn add(&mut self, negative: bool, m: u64, pos: u32) {
+        if self.pending == BUCKET_ROOM {
+            self.flush();
+        }
+        self.pending += 1;
+        let p = pos as usize;
+        let v = i128::from(m) << (pos & 31);
+        if let Some(b) = self.values.get_mut(p >> 5) {
+            *b += if negative { -v } else { v };
+        }
+        let sq = (u128::from(m) * u128::from(m)) << (2 * (pos & 7));
+        let i = p >> 3;
+        if let Some(b) = self.squares.get_mut(i) {
+            *b += sq;
+        }
+        self.touched_lo = self.touched_lo.min(i);
+        self.touched_hi = self.touched_hi.max(i);
+    }
+
+    /// Moves the buckets into the exact accumulators.
+    fn flush(&mut self) {
+        let (lo, hi) = (self.touched_lo, self.touched_hi);
+        if lo <= hi {
+            // Square bucket i covers value positions 8i..8i+7, value bucket i / 4.
+            for j in (lo >> 2)..=(hi >> 2) {
+                if let Some(b) = self.values.get_mut(j) {
+                    let v = std::mem::take(b);
+                    if v != 0 {
+                        self.sum.add(v < 0, v.unsigned_abs(), 32 * j as u32);
+                    }
+                }
+            }
+            for i in lo..=hi {
+                if let Some(b) = self.squares.get_mut(i) {
+                    let v = std::mem::take(b);
+                    if v != 0 {
+                        self.sum_sq.add(false, v, 16 * i as u32);
+                    }
+                }
+            }
+        }
+        self.touched_lo = SQUARE_BUCKETS;
+        self.touched_hi = 0;
+        self.pending = 0;
+    }
+
+    /// The exact sums, `(values, squares)`.
+    pub(crate) fn exact(&self) -> (Fixed<VALUE_CHUNKS>, Fixed<SQUARE_CHUNKS>) {
+        let mut s = self.clone();
+        s.flush();
+        s.sum.normalize();
+        s.sum_sq.normalize();
+        (s.sum, s.sum_sq)
+    }
+
+    /// Adds other sums.
+    pub(crate) fn merge(&mut self, other: &Self) {
+        self.flush();
+        let (a, b) = other.exact();
+        self.sum.merge(&a);
+        self.sum_sq.merge(&b);
+    }
+
+    /// Sums holding exactly `sum` and `sum_sq`.
+    pub(crate) fn from_exact(sum: Fixed<VALUE_CHUNKS>, sum_sq: Fixed<SQUARE_CHUNKS>) -> Self {
+        Self {
+            sum,
+            sum_sq,
+            ..Self::default()
+        }
+    }
+}
+
+impl PartialEq for Sums {
+    fn eq(&self, other: &Self) -> bool {
+        self.exact() == other.exact()
+    }
+}
+
 /// `num / den * 2^exp2` rounded to the nearest `f64` (ties to even); `den > 0`.
 pub(crate) fn ratio_to_f64(num: &BigInt, den: &BigUint, exp2: i64) -> f64 {
     let (sign, mag) = (num.sign(), num.magnitude());
@@ -266,14 +371,12 @@ mod tests {
     use super::*;
 
     fn sums(values: &[f64]) -> (Fixed<VALUE_CHUNKS>, Fixed<SQUARE_CHUNKS>) {
-        let mut s1 = Fixed::default();
-        let mut s2 = Fixed::default();
+        let mut s = Sums::default();
         for &x in values {
             let (neg, m, pos) = split(x).unwrap();
-            s1.add_mantissa(neg, m, pos);
-            s2.add(false, u128::from(m) * u128::from(m), 2 * pos);
+            s.add(neg, m, pos);
         }
-        (s1, s2)
+        s.exact()
     }
 
     #[test]
@@ -313,6 +416,7 @@ mod tests {
 
     #[test]
     fn order_does_not_matter_and_merge_is_addition() {
+        // More values than a bucket takes between flushes, over many exponents.
         let v: Vec<f64> = (0..2000)
             .map(|i| ((i as f64) * 0.7309).sin() * 10f64.powi(i % 17 - 8))
             .collect();
@@ -337,10 +441,24 @@ mod tests {
             ..Fixed::default()
         };
         for _ in 0..10 {
-            s.add_mantissa(false, (1 << 53) - 1, 31);
+            s.add(false, (1 << 53) - 1, 31);
         }
         let want = (BigInt::from(10) * BigInt::from((1u64 << 53) - 1)) << 31u32;
         assert_eq!(s.to_bigint(), want);
+    }
+
+    #[test]
+    fn full_buckets_are_flushed_before_they_overflow() {
+        // 4.0.next_down() = (2^53 - 1) 2^-51: the largest mantissa at position 1023, the
+        // largest shift of its square bucket (2 (1023 & 7) = 14 bits).
+        let x = 4.0f64.next_down();
+        assert_eq!(split(x), Some((false, (1 << 53) - 1, 1023)));
+        let (s1, s2) = sums(&[x; 1000]);
+        let m = BigInt::from((1u64 << 53) - 1);
+        assert_eq!(s1.to_bigint(), BigInt::from(1000) * &m << 1023u32);
+        assert_eq!(s2.to_bigint(), BigInt::from(1000) * &m * &m << 2046u32);
+        assert_eq!(mean(1000, &s1), x);
+        assert_eq!(sample_variance(1000, &s1, &s2), 0.0);
     }
 
     #[test]

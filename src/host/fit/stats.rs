@@ -6,7 +6,7 @@ use std::vec::Vec;
 use crate::{Axis, EdgeMode, VARIANCE_FLOOR};
 
 use super::binpicker;
-use super::exact::{self, Fixed, SQUARE_CHUNKS, VALUE_CHUNKS};
+use super::exact::{self, Fixed, Sums};
 
 /// The exact state of a [`ClassMoments`] in canonical form (the serialized form).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -52,10 +52,8 @@ pub struct ClassMoments {
     max: f64,
     /// Whether a NaN or infinite value was pushed (the mean and variance are then NaN).
     non_finite: bool,
-    /// Exact sum of the values (units of 2^-1074).
-    sum: Fixed<VALUE_CHUNKS>,
-    /// Exact sum of their squares (units of 2^-2148).
-    squares: Fixed<SQUARE_CHUNKS>,
+    /// Exact sums of the values and of their squares.
+    sums: std::boxed::Box<Sums>,
 }
 
 impl ClassMoments {
@@ -67,8 +65,7 @@ impl ClassMoments {
             min: f64::INFINITY,
             max: f64::NEG_INFINITY,
             non_finite: false,
-            sum: Fixed::default(),
-            squares: Fixed::default(),
+            sums: std::boxed::Box::default(),
         }
     }
 
@@ -80,11 +77,7 @@ impl ClassMoments {
         self.min = self.min.min(x);
         self.max = self.max.max(x);
         match exact::split(x) {
-            Some((negative, m, pos)) => {
-                self.sum.add_mantissa(negative, m, pos);
-                self.squares
-                    .add(false, u128::from(m) * u128::from(m), 2 * pos);
-            }
+            Some((negative, m, pos)) => self.sums.add(negative, m, pos),
             None => self.non_finite = true,
         }
     }
@@ -96,19 +89,19 @@ impl ClassMoments {
         self.min = self.min.min(other.min);
         self.max = self.max.max(other.max);
         self.non_finite |= other.non_finite;
-        self.sum.merge(&other.sum);
-        self.squares.merge(&other.squares);
+        self.sums.merge(&other.sums);
     }
 
     /// The exact state in canonical form, for serialization.
     pub(crate) fn to_parts(&self) -> MomentParts {
+        let (sum, squares) = self.sums.exact();
         MomentParts {
             count: self.count,
             min: self.min,
             max: self.max,
             non_finite: self.non_finite,
-            sum: self.sum.to_words(),
-            squares: self.squares.to_words(),
+            sum: sum.to_words(),
+            squares: squares.to_words(),
         }
     }
 
@@ -130,8 +123,10 @@ impl ClassMoments {
             min: p.min,
             max: p.max,
             non_finite: p.non_finite,
-            sum: Fixed::from_words(p.sum.0, &p.sum.1)?,
-            squares: Fixed::from_words(p.squares.0, &p.squares.1)?,
+            sums: std::boxed::Box::new(Sums::from_exact(
+                Fixed::from_words(p.sum.0, &p.sum.1)?,
+                Fixed::from_words(p.squares.0, &p.squares.1)?,
+            )),
         })
     }
 
@@ -160,7 +155,7 @@ impl ClassMoments {
         if self.non_finite {
             return f64::NAN;
         }
-        exact::mean(self.count, &self.sum)
+        exact::mean(self.count, &self.sums.exact().0)
     }
 
     /// Sample variance (`ddof = 1`, as MATLAB's `fitdist(x, 'Normal')`); 0 with fewer
@@ -169,7 +164,8 @@ impl ClassMoments {
         if self.non_finite {
             return f64::NAN;
         }
-        exact::sample_variance(self.count, &self.sum, &self.squares)
+        let (sum, squares) = self.sums.exact();
+        exact::sample_variance(self.count, &sum, &squares)
     }
 
     /// The variance written to the table: [`sample_variance`](Self::sample_variance)
