@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use mlmap::host::data::Loaded;
-use mlmap::host::dataset::{DataErrorKind, DataSource, Label, Row, RowSource};
+use mlmap::host::dataset::{DataErrorKind, DataSource, Label, Row};
 use mlmap::host::fit::{
     finish, fit, BayesParams, ClassMoments, FitCounts, FitEdges, FitError, FitParams, FitStats,
     TrainingSet, STATS_FORMAT_VERSION,

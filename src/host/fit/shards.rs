@@ -511,6 +511,31 @@ impl FitCounts {
     }
 }
 
+/// Serialized pass-(a) statistics or pass-(b) counts, told apart by their magic bytes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FitFile {
+    /// Pass-(a) statistics ([`FitStats::to_bytes`]).
+    Stats(FitStats),
+    /// Pass-(b) counts ([`FitCounts::to_bytes`]).
+    Counts(FitCounts),
+}
+
+impl FitFile {
+    /// Decodes statistics or counts, whichever the bytes hold.
+    ///
+    /// # Errors
+    ///
+    /// [`FitError::Format`] as [`FitStats::from_bytes`] and [`FitCounts::from_bytes`]
+    /// (edges and other bytes are refused).
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, FitError> {
+        if bytes.starts_with(MAGIC_COUNTS) {
+            FitCounts::from_bytes(bytes).map(Self::Counts)
+        } else {
+            FitStats::from_bytes(bytes).map(Self::Stats)
+        }
+    }
+}
+
 /// Builds the table from pass (a) statistics and pass (b) counts of the same rows.
 ///
 /// # Errors
