@@ -10,20 +10,77 @@
 //! * the **prior**: the mean and the sample variance (`ddof = 1`) of `v_c`, the
 //!   variance floored to [`VARIANCE_FLOOR`](crate::VARIANCE_FLOOR).
 //!
-//! The moments are accumulated in `f64`. The histogram counts use the values rounded
-//! to `f32` and the table's own `f32` edges and bin rule
+//! The moments are exact: the sum and sum of squares of `v_c` are accumulated without
+//! rounding ([`ClassMoments`]), so the mean and variance do not depend on the order of
+//! the rows, and statistics of shards merge exactly ([`FitStats`]). The histogram counts
+//! use the values rounded to `f32` and the table's own `f32` edges and bin rule
 //! ([`Histogram::bin`](crate::Histogram::bin)), so each training value is counted in
 //! exactly the bin the device looks it up in.
 //!
 //! # Two ways to fit
 //!
-//! * [`fit`] streams the data twice (pass 1: [`class_moments`]; pass 2: the counts).
-//!   Memory is `O(K B)`, whatever the number of rows.
+//! * [`fit`] streams the data twice (pass (a): [`FitStats`]; pass (b): [`FitCounts`]
+//!   over the [`FitEdges`] of pass (a); then [`finish`]). Memory is `O(K B)`, whatever
+//!   the number of rows. The same steps run over shards of the data, on any machines,
+//!   and merge exactly ([`FitStats::merge`], [`FitCounts::merge`]): any split gives the
+//!   table of one fit.
 //! * [`TrainingSet::read`] streams the data once and keeps `v_c` of every class in
 //!   memory (4 bytes per labelled row, sorted). Histograms for any bin count are then
 //!   computed without reading the data again, in `O(K B log n)`
 //!   ([`TrainingSet::histograms`]), and [`build_table`] assembles tables for any
 //!   lambdas: this is what hyper-parameter tuning needs. Both give identical tables.
+//!
+//! # Sharded fitting
+//!
+//! * Pass (a), [`FitStats`]: per class the exact [`ClassMoments`] (count, extremes,
+//!   exact sums), and the Bayes head's [`BayesMoments`] (extremes of every logit and
+//!   rows per category). Shards' statistics [`merge`](FitStats::merge) exactly.
+//! * [`FitStats::edges`] turns the merged statistics and the [`FitParams`] into
+//!   [`FitEdges`]: the axes of every histogram.
+//! * Pass (b), [`FitCounts`]: the bin counts of every head over those edges, per shard,
+//!   merged by addition.
+//! * [`finish`] builds the table from the merged statistics and counts.
+//!
+//! Every step is exact (integer counts, exact sums, extremes), so any split of the rows
+//! into shards, merged in any order and grouping, gives the same table bytes as
+//! [`fit`](fit()) over all rows; `fit` itself runs these steps over one source.
+//!
+//! ## Serialized form
+//!
+//! [`FitStats::to_bytes`], [`FitEdges::to_bytes`] and [`FitCounts::to_bytes`] write
+//! `magic (8 bytes) | format version (u16 LE) | postcard body | CRC-32 (u32 LE)`, the
+//! CRC (zlib's) covering every byte before it. The magics are `MLMAPFST` (statistics),
+//! `MLMAPFED` (edges) and `MLMAPFCT` (counts); the format version is
+//! [`STATS_FORMAT_VERSION`]. Floats are stored as their IEEE bits, so a round trip is
+//! exact; equal statistics have equal bytes (the exact sums are stored in canonical
+//! form). A file of a newer format version, of another kind, truncated or corrupt is
+//! refused with a [`FitError::Format`] that says which.
+//!
+//! ```
+//! use mlmap::host::dataset::{Label, Row};
+//! use mlmap::host::fit::{finish, FitCounts, FitParams, FitStats};
+//!
+//! fn row((c, x): &(usize, [f64; 2])) -> Row<'_> {
+//!     Row { index: 0, line: None, id: None, label: Label::Class(*c), objectness: 1.0, logits: x }
+//! }
+//! let rows = [(0, [2.0, -1.0]), (1, [0.5, 1.5]), (0, [3.0, 0.0]), (1, [-0.5, 2.5])];
+//! let params = FitParams::default();
+//! // Pass (a) on two shards, merged through bytes.
+//! let (mut a, mut b) = (FitStats::new(&["car", "person"]), FitStats::new(&["car", "person"]));
+//! rows[..1].iter().for_each(|r| a.push(&row(r)));
+//! rows[1..].iter().for_each(|r| b.push(&row(r)));
+//! let mut stats = FitStats::from_bytes(&b.to_bytes())?;
+//! stats.merge(&a)?;
+//! // Pass (b) over the edges of the merged statistics.
+//! let edges = stats.edges(&params)?;
+//! let mut counts = FitCounts::new(&edges);
+//! for r in &rows {
+//!     assert!(counts.push(&row(r)));
+//! }
+//! let table = finish(&stats, &counts)?;
+//! assert_eq!(table.rows(), &[2, 2]);
+//! # Ok::<(), mlmap::host::fit::FitError>(())
+//! ```
 //!
 //! # MATLAB's bin picker
 //!

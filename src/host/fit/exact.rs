@@ -455,8 +455,8 @@ mod tests {
         assert_eq!(split(x), Some((false, (1 << 53) - 1, 1023)));
         let (s1, s2) = sums(&[x; 1000]);
         let m = BigInt::from((1u64 << 53) - 1);
-        assert_eq!(s1.to_bigint(), BigInt::from(1000) * &m << 1023u32);
-        assert_eq!(s2.to_bigint(), BigInt::from(1000) * &m * &m << 2046u32);
+        assert_eq!(s1.to_bigint(), (BigInt::from(1000) * &m) << 1023u32);
+        assert_eq!(s2.to_bigint(), (BigInt::from(1000) * &m * &m) << 2046u32);
         assert_eq!(mean(1000, &s1), x);
         assert_eq!(sample_variance(1000, &s1, &s2), 0.0);
     }

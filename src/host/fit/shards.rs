@@ -1,56 +1,5 @@
-//! The fit as two exact, mergeable passes over shards of the data (DESIGN §1.1,
-//! "Sharded fitting").
-//!
-//! * Pass (a), [`FitStats`]: per class the exact [`ClassMoments`] (count, extremes,
-//!   exact sums), and the Bayes head's [`BayesMoments`] (extremes of every logit and
-//!   rows per category). Shards' statistics [`merge`](FitStats::merge) exactly.
-//! * [`FitStats::edges`] turns the merged statistics and the [`FitParams`] into
-//!   [`FitEdges`]: the axes of every histogram.
-//! * Pass (b), [`FitCounts`]: the bin counts of every head over those edges, per shard,
-//!   merged by addition.
-//! * [`finish`] builds the table from the merged statistics and counts.
-//!
-//! Every step is exact (integer counts, exact sums, extremes), so any split of the rows
-//! into shards, merged in any order and grouping, gives the same table bytes as
-//! [`fit`](super::fit()) over all rows; `fit` itself runs these steps over one source.
-//!
-//! # Serialized form
-//!
-//! [`FitStats::to_bytes`], [`FitEdges::to_bytes`] and [`FitCounts::to_bytes`] write
-//! `magic (8 bytes) | format version (u16 LE) | postcard body | CRC-32 (u32 LE)`, the
-//! CRC (zlib's) covering every byte before it. The magics are `MLMAPFST` (statistics),
-//! `MLMAPFED` (edges) and `MLMAPFCT` (counts); the format version is
-//! [`STATS_FORMAT_VERSION`]. Floats are stored as their IEEE bits, so a round trip is
-//! exact; equal statistics have equal bytes (the exact sums are stored in canonical
-//! form). A file of a newer format version, of another kind, truncated or corrupt is
-//! refused with a [`FitError::Format`] that says which.
-//!
-//! ```
-//! use mlmap::host::dataset::{Label, Row};
-//! use mlmap::host::fit::{finish, FitCounts, FitParams, FitStats};
-//!
-//! let rows: Vec<(usize, [f64; 2])> =
-//!     vec![(0, [2.0, -1.0]), (1, [0.5, 1.5]), (0, [3.0, 0.0]), (1, [-0.5, 2.5])];
-//! let row = |i: usize, (c, x): &(usize, [f64; 2])| -> Row<'_> {
-//!     Row { index: i as u64, line: None, id: None, label: Label::Class(*c), objectness: 1.0, logits: x }
-//! };
-//! let params = FitParams::default();
-//! // Pass (a) on two shards, merged through bytes.
-//! let (mut a, mut b) = (FitStats::new(&["car", "person"]), FitStats::new(&["car", "person"]));
-//! rows[..1].iter().enumerate().for_each(|(i, r)| a.push(&row(i, r)));
-//! rows[1..].iter().enumerate().for_each(|(i, r)| b.push(&row(i, r)));
-//! let mut stats = FitStats::from_bytes(&b.to_bytes())?;
-//! stats.merge(&a)?;
-//! // Pass (b) over the edges of the merged statistics.
-//! let edges = stats.edges(&params)?;
-//! let mut counts = FitCounts::new(&edges);
-//! for (i, r) in rows.iter().enumerate() {
-//!     assert!(counts.push(&row(i, r)));
-//! }
-//! let table = finish(&stats, &counts)?;
-//! assert_eq!(table.rows(), &[2, 2]);
-//! # Ok::<(), mlmap::host::fit::FitError>(())
-//! ```
+//! The fit as two exact, mergeable passes over shards of the data: see the
+//! "Sharded fitting" section of [`crate::host::fit`].
 
 use std::path::Path;
 use std::string::{String, ToString};
@@ -79,7 +28,7 @@ const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
 const STATS: &str = "the statistics";
 
 /// Pass (a) of a fit: the exact, mergeable statistics of some rows (see the
-/// [module docs](self)).
+/// [sharded fitting](crate::host::fit#sharded-fitting)).
 ///
 /// The fit settings can be recorded with them ([`with_params`](Self::with_params)), so
 /// that shards fitted with other settings cannot be merged by mistake.
@@ -214,7 +163,7 @@ impl FitStats {
         })
     }
 
-    /// The serialized statistics (see the [module docs](self)).
+    /// The serialized statistics (see the [sharded fitting](crate::host::fit#sharded-fitting)).
     pub fn to_bytes(&self) -> Vec<u8> {
         let (bayes_min, bayes_max, bayes_rows) = self.bayes.to_parts();
         let wire = StatsWire {
@@ -358,7 +307,7 @@ impl FitEdges {
         })
     }
 
-    /// The serialized edges (see the [module docs](self)).
+    /// The serialized edges (see the [sharded fitting](crate::host::fit#sharded-fitting)).
     pub fn to_bytes(&self) -> Vec<u8> {
         encode(MAGIC_EDGES, &self.to_wire())
     }
@@ -375,7 +324,7 @@ impl FitEdges {
 }
 
 /// Pass (b) of a fit: the bin counts of every head over given [`FitEdges`] (see the
-/// [module docs](self)).
+/// [sharded fitting](crate::host::fit#sharded-fitting)).
 #[derive(Debug, Clone)]
 pub struct FitCounts {
     edges: FitEdges,
@@ -466,7 +415,7 @@ impl FitCounts {
         Ok(())
     }
 
-    /// The serialized counts, with their edges (see the [module docs](self)).
+    /// The serialized counts, with their edges (see the [sharded fitting](crate::host::fit#sharded-fitting)).
     pub fn to_bytes(&self) -> Vec<u8> {
         let counts = |c: &[BinCounter]| c.iter().map(|b| b.counts().to_vec()).collect();
         let wire = CountsWire {
