@@ -23,6 +23,11 @@ mod host_data;
 #[cfg(feature = "std")]
 mod host_fit;
 
+/// Mergeable fit statistics: shards merged in any order give the bytes of one fit; the
+/// exact sums against a big-integer oracle; versioned bytes; in-memory rows.
+#[cfg(feature = "std")]
+mod host_shards;
+
 /// Host metrics and baselines against the numpy / scikit-learn golden files written by
 /// tools/metrics_reference.py.
 #[cfg(feature = "std")]

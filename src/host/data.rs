@@ -2,10 +2,10 @@
 //! ([`eval`](super::eval), [`tune`](super::tune)); fitting and scoring stream instead.
 
 use std::path::Path;
-use std::string::String;
+use std::string::{String, ToString};
 use std::vec::Vec;
 
-use super::dataset::{DataSource, Label, Location};
+use super::dataset::{DataError, DataErrorKind, DataSource, Label, Location, Row, RowSource};
 use super::error::HostError;
 
 /// Opens a data source (CSV file or NPY directory).
@@ -25,7 +25,33 @@ pub fn at(path: &Path, location: Location) -> String {
     }
 }
 
-/// Every row of a data file.
+/// Every row of a data file, or rows built in memory (e.g. from arrays).
+///
+/// As a [`RowSource`] it can be fitted from ([`fit`](crate::host::fit::fit()),
+/// [`TrainingSet::read`](crate::host::fit::TrainingSet::read), [`FitStats`](crate::host::fit::FitStats)).
+/// Its messages name the rows `rows`, by row index (or by the `locations` recorded when
+/// read from a file). Rows built in memory are checked as they are streamed: the
+/// lengths of the fields must agree, logits must be finite, objectness in `[0, 1]`,
+/// labels class indices.
+///
+/// ```
+/// use mlmap::host::data::Loaded;
+/// use mlmap::host::dataset::Label;
+/// use mlmap::host::fit::{fit, FitParams};
+///
+/// let rows = Loaded {
+///     classes: vec!["car".into(), "person".into()],
+///     labels: vec![Label::Class(0), Label::Class(1), Label::Class(0), Label::Class(1)],
+///     objectness: vec![1.0; 4],
+///     logits: vec![2.0, -1.0, 3.0, 1.5, 1.0, 0.0, -0.5, 2.5],
+///     locations: Vec::new(),
+///     has_labels: true,
+///     first_missing_label: None,
+/// };
+/// let table = fit(&rows, &FitParams::default())?;
+/// assert_eq!(table.rows(), &[2, 2]);
+/// # Ok::<(), mlmap::host::fit::FitError>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Loaded {
     /// Class names, in column order.
@@ -125,6 +151,100 @@ impl Loaded {
     /// Objectness in the layer's precision.
     pub fn objectness_f32(&self) -> Vec<f32> {
         self.objectness.iter().map(|&x| x as f32).collect()
+    }
+}
+
+/// What in-memory rows are named in messages.
+const ROWS: &str = "rows";
+
+impl RowSource for Loaded {
+    fn path(&self) -> &Path {
+        Path::new(ROWS)
+    }
+
+    fn classes(&self) -> &[String] {
+        &self.classes
+    }
+
+    fn has_labels(&self) -> bool {
+        self.has_labels
+    }
+
+    fn for_each_row<E, F>(&self, mut f: F) -> Result<(), E>
+    where
+        E: From<DataError>,
+        F: FnMut(Row<'_>) -> Result<(), E>,
+    {
+        let k = self.classes.len();
+        let n = self.labels.len();
+        let length = |what, found: usize, expected: usize| {
+            DataError::new(
+                ROWS,
+                DataErrorKind::Length {
+                    what,
+                    expected: expected as u64,
+                    found: found as u64,
+                },
+            )
+        };
+        if k == 0 {
+            return Err(DataError::new(ROWS, DataErrorKind::ClassCount { found: 0 }).into());
+        }
+        if self.logits.len() != n.saturating_mul(k) {
+            let expected = n.saturating_mul(k);
+            return Err(length("logits (rows x classes)", self.logits.len(), expected).into());
+        }
+        if self.objectness.len() != n {
+            return Err(length("objectness (one per row)", self.objectness.len(), n).into());
+        }
+        let rows = self
+            .labels
+            .iter()
+            .zip(&self.objectness)
+            .zip(self.logits.chunks_exact(k));
+        for (i, ((&label, &objectness), logits)) in rows.enumerate() {
+            let location = self
+                .locations
+                .get(i)
+                .copied()
+                .unwrap_or(Location::Row(i as u64));
+            let bad = |kind| DataError::new(ROWS, kind).at(location);
+            if let Label::Class(c) = label {
+                if c >= k {
+                    let kind = DataErrorKind::LabelIndex {
+                        value: c as i128,
+                        classes: k,
+                    };
+                    return Err(bad(kind).in_column("label").into());
+                }
+            }
+            if let Some((j, x)) = logits.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+                let kind = DataErrorKind::NotFinite {
+                    text: x.to_string(),
+                };
+                let column = self.classes.get(j).cloned().unwrap_or_default();
+                return Err(bad(kind).in_column(column).into());
+            }
+            if !(0.0..=1.0).contains(&objectness) {
+                let kind = DataErrorKind::ObjectnessRange {
+                    text: objectness.to_string(),
+                };
+                return Err(bad(kind).in_column("objectness").into());
+            }
+            let (index, line) = match location {
+                Location::Line(l) => (i as u64, Some(l)),
+                Location::Row(r) => (r, None),
+            };
+            f(Row {
+                index,
+                line,
+                id: None,
+                label,
+                objectness,
+                logits,
+            })?;
+        }
+        Ok(())
     }
 }
 

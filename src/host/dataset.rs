@@ -78,6 +78,56 @@ impl Row<'_> {
     }
 }
 
+/// Rows to fit or score from: a data file ([`DataSource`]) or rows held in memory
+/// ([`Loaded`](crate::host::data::Loaded)).
+///
+/// The fit ([`fit`](crate::host::fit::fit()), [`class_moments`](crate::host::fit::class_moments),
+/// [`TrainingSet::read`](crate::host::fit::TrainingSet::read)) works on any source.
+pub trait RowSource {
+    /// What error messages name: the file, or `rows` for rows held in memory.
+    fn path(&self) -> &Path;
+
+    /// The class names, in column order.
+    fn classes(&self) -> &[String];
+
+    /// `true` when the rows carry labels.
+    fn has_labels(&self) -> bool;
+
+    /// Streams every row, in order, through `f`; stops at the first error, of the data
+    /// or of `f`. Can be called again (a fit makes two passes).
+    ///
+    /// # Errors
+    ///
+    /// The first [`DataError`] of a row (converted into `E`), or the first error `f`
+    /// returns.
+    fn for_each_row<E, F>(&self, f: F) -> Result<(), E>
+    where
+        E: From<DataError>,
+        F: FnMut(Row<'_>) -> Result<(), E>;
+}
+
+impl RowSource for DataSource {
+    fn path(&self) -> &Path {
+        DataSource::path(self)
+    }
+
+    fn classes(&self) -> &[String] {
+        DataSource::classes(self)
+    }
+
+    fn has_labels(&self) -> bool {
+        DataSource::has_labels(self)
+    }
+
+    fn for_each_row<E, F>(&self, f: F) -> Result<(), E>
+    where
+        E: From<DataError>,
+        F: FnMut(Row<'_>) -> Result<(), E>,
+    {
+        DataSource::for_each_row(self, f)
+    }
+}
+
 /// A checked data file (CSV) or directory (NPY), ready to be streamed.
 #[derive(Debug, Clone)]
 pub struct DataSource {

@@ -10,20 +10,77 @@
 //! * the **prior**: the mean and the sample variance (`ddof = 1`) of `v_c`, the
 //!   variance floored to [`VARIANCE_FLOOR`](crate::VARIANCE_FLOOR).
 //!
-//! The moments are accumulated in `f64`. The histogram counts use the values rounded
-//! to `f32` and the table's own `f32` edges and bin rule
+//! The moments are exact: the sum and sum of squares of `v_c` are accumulated without
+//! rounding ([`ClassMoments`]), so the mean and variance do not depend on the order of
+//! the rows, and statistics of shards merge exactly ([`FitStats`]). The histogram counts
+//! use the values rounded to `f32` and the table's own `f32` edges and bin rule
 //! ([`Histogram::bin`](crate::Histogram::bin)), so each training value is counted in
 //! exactly the bin the device looks it up in.
 //!
 //! # Two ways to fit
 //!
-//! * [`fit`] streams the data twice (pass 1: [`class_moments`]; pass 2: the counts).
-//!   Memory is `O(K B)`, whatever the number of rows.
+//! * [`fit`] streams the data twice (pass (a): [`FitStats`]; pass (b): [`FitCounts`]
+//!   over the [`FitEdges`] of pass (a); then [`finish`]). Memory is `O(K B)`, whatever
+//!   the number of rows. The same steps run over shards of the data, on any machines,
+//!   and merge exactly ([`FitStats::merge`], [`FitCounts::merge`]): any split gives the
+//!   table of one fit.
 //! * [`TrainingSet::read`] streams the data once and keeps `v_c` of every class in
 //!   memory (4 bytes per labelled row, sorted). Histograms for any bin count are then
 //!   computed without reading the data again, in `O(K B log n)`
 //!   ([`TrainingSet::histograms`]), and [`build_table`] assembles tables for any
 //!   lambdas: this is what hyper-parameter tuning needs. Both give identical tables.
+//!
+//! # Sharded fitting
+//!
+//! * Pass (a), [`FitStats`]: per class the exact [`ClassMoments`] (count, extremes,
+//!   exact sums), and the Bayes head's [`BayesMoments`] (extremes of every logit and
+//!   rows per category). Shards' statistics [`merge`](FitStats::merge) exactly.
+//! * [`FitStats::edges`] turns the merged statistics and the [`FitParams`] into
+//!   [`FitEdges`]: the axes of every histogram.
+//! * Pass (b), [`FitCounts`]: the bin counts of every head over those edges, per shard,
+//!   merged by addition.
+//! * [`finish`] builds the table from the merged statistics and counts.
+//!
+//! Every step is exact (integer counts, exact sums, extremes), so any split of the rows
+//! into shards, merged in any order and grouping, gives the same table bytes as
+//! [`fit`](fit()) over all rows; `fit` itself runs these steps over one source.
+//!
+//! ## Serialized form
+//!
+//! [`FitStats::to_bytes`], [`FitEdges::to_bytes`] and [`FitCounts::to_bytes`] write
+//! `magic (8 bytes) | format version (u16 LE) | postcard body | CRC-32 (u32 LE)`, the
+//! CRC (zlib's) covering every byte before it. The magics are `MLMAPFST` (statistics),
+//! `MLMAPFED` (edges) and `MLMAPFCT` (counts); the format version is
+//! [`STATS_FORMAT_VERSION`]. Floats are stored as their IEEE bits, so a round trip is
+//! exact; equal statistics have equal bytes (the exact sums are stored in canonical
+//! form). A file of a newer format version, of another kind, truncated or corrupt is
+//! refused with a [`FitError::Format`] that says which.
+//!
+//! ```
+//! use mlmap::host::dataset::{Label, Row};
+//! use mlmap::host::fit::{finish, FitCounts, FitParams, FitStats};
+//!
+//! fn row((c, x): &(usize, [f64; 2])) -> Row<'_> {
+//!     Row { index: 0, line: None, id: None, label: Label::Class(*c), objectness: 1.0, logits: x }
+//! }
+//! let rows = [(0, [2.0, -1.0]), (1, [0.5, 1.5]), (0, [3.0, 0.0]), (1, [-0.5, 2.5])];
+//! let params = FitParams::default();
+//! // Pass (a) on two shards, merged through bytes.
+//! let (mut a, mut b) = (FitStats::new(&["car", "person"]), FitStats::new(&["car", "person"]));
+//! rows[..1].iter().for_each(|r| a.push(&row(r)));
+//! rows[1..].iter().for_each(|r| b.push(&row(r)));
+//! let mut stats = FitStats::from_bytes(&b.to_bytes())?;
+//! stats.merge(&a)?;
+//! // Pass (b) over the edges of the merged statistics.
+//! let edges = stats.edges(&params)?;
+//! let mut counts = FitCounts::new(&edges);
+//! for r in &rows {
+//!     assert!(counts.push(&row(r)));
+//! }
+//! let table = finish(&stats, &counts)?;
+//! assert_eq!(table.rows(), &[2, 2]);
+//! # Ok::<(), mlmap::host::fit::FitError>(())
+//! ```
 //!
 //! # MATLAB's bin picker
 //!
@@ -51,18 +108,21 @@
 mod bayes;
 mod binpicker;
 mod error;
+mod exact;
+mod shards;
 mod stats;
 
 use std::path::{Path, PathBuf};
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use crate::host::dataset::{DataSource, Label, Row};
+use crate::host::dataset::{Label, Row, RowSource};
 use crate::host::DynTable;
-use crate::{ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
+use crate::{Axis, ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMBDA};
 
 pub use bayes::{BayesCounts, BayesMoments, BayesParams};
 pub use error::{warnings, FitError, FitWarning};
+pub use shards::{finish, FitCounts, FitEdges, FitFile, FitStats, STATS_FORMAT_VERSION};
 pub use stats::{ClassHistogram, ClassMoments};
 
 use stats::BinCounter;
@@ -167,6 +227,7 @@ impl FitParams {
 }
 
 /// The value `v_c` a row contributes, with its class: `x_c` of a row labelled `c`.
+#[inline]
 fn class_value(row: &Row<'_>) -> Option<(usize, f64)> {
     match row.label {
         Label::Class(c) => row.logits.get(c).map(|&x| (c, x)),
@@ -175,7 +236,7 @@ fn class_value(row: &Row<'_>) -> Option<(usize, f64)> {
 }
 
 /// Refuses unlabelled sources.
-fn require_labels(source: &DataSource) -> Result<(), FitError> {
+fn require_labels(source: &impl RowSource) -> Result<(), FitError> {
     if source.has_labels() {
         Ok(())
     } else {
@@ -202,12 +263,16 @@ fn require_rows(path: &Path, moments: &[ClassMoments]) -> Result<(), FitError> {
     }
 }
 
-fn empty_moments(source: &DataSource) -> Vec<ClassMoments> {
-    source
-        .classes()
-        .iter()
-        .map(|c| ClassMoments::new(c.as_str()))
-        .collect()
+/// Pass (a) over a whole source: its [`FitStats`], checked for labels and rows.
+fn pass_a(source: &impl RowSource) -> Result<FitStats, FitError> {
+    require_labels(source)?;
+    let mut stats = FitStats::new(source.classes());
+    source.for_each_row(|row| {
+        stats.push(&row);
+        Ok::<(), FitError>(())
+    })?;
+    require_rows(source.path(), stats.moments())?;
+    Ok(stats)
 }
 
 /// Pass 1 of [`fit`]: the moments of every class, in one streaming pass.
@@ -216,63 +281,42 @@ fn empty_moments(source: &DataSource) -> Vec<ClassMoments> {
 ///
 /// [`FitError::Data`] for unreadable data, [`FitError::NoLabels`] for unlabelled data,
 /// [`FitError::EmptyClasses`] when a class has no training rows.
-pub fn class_moments(source: &DataSource) -> Result<Vec<ClassMoments>, FitError> {
-    Ok(pass_1(source, false)?.0)
+pub fn class_moments(source: &impl RowSource) -> Result<Vec<ClassMoments>, FitError> {
+    Ok(pass_a(source)?.moments().to_vec())
 }
 
-/// Pass 1: the moments of every class and, when `bayes`, the Bayes head's extremes and
-/// category rows.
-fn pass_1(
-    source: &DataSource,
-    bayes: bool,
-) -> Result<(Vec<ClassMoments>, Option<BayesMoments>), FitError> {
-    require_labels(source)?;
-    let mut moments = empty_moments(source);
-    let mut bayes = bayes.then(|| BayesMoments::new(source.classes()));
-    source.for_each_row(|row| {
-        if let Some((c, x)) = class_value(&row) {
-            if let Some(m) = moments.get_mut(c) {
-                m.push(x);
-            }
-        }
-        if let Some(b) = &mut bayes {
-            b.push(&row);
-        }
-        Ok::<(), FitError>(())
-    })?;
-    require_rows(source.path(), &moments)?;
-    Ok((moments, bayes))
-}
-
-/// A counter over the histogram range of class `m`.
-fn counter_for(m: &ClassMoments, bins: usize, edges: EdgeMode) -> Result<BinCounter, FitError> {
-    if !((m.min() as f32).is_finite() && (m.max() as f32).is_finite()) {
+/// The axis of a histogram of `bins` bins over values in `[min, max]` (named `name` in
+/// errors), placed by `edges`.
+pub(crate) fn checked_axis(
+    name: &str,
+    min: f64,
+    max: f64,
+    bins: usize,
+    edges: EdgeMode,
+) -> Result<Axis, FitError> {
+    if !((min as f32).is_finite() && (max as f32).is_finite()) {
         return Err(FitError::OutOfF32 {
-            class: m.name().to_string(),
+            class: name.to_string(),
         });
     }
-    let (lo, hi) = m.range(bins, edges);
-    BinCounter::new(lo, hi, bins).ok_or_else(|| FitError::Edges {
-        class: m.name().to_string(),
+    let (lo, hi) = stats::range(min, max, bins, edges);
+    Axis::new(lo, hi, bins).map_err(|_| FitError::Edges {
+        class: name.to_string(),
         bins,
         lo,
         hi,
     })
 }
 
-fn counters(
-    moments: &[ClassMoments],
-    bins: usize,
-    edges: EdgeMode,
-) -> Result<Vec<BinCounter>, FitError> {
-    moments
-        .iter()
-        .map(|m| counter_for(m, bins, edges))
-        .collect()
+/// A counter over the histogram range of class `m`.
+fn counter_for(m: &ClassMoments, bins: usize, edges: EdgeMode) -> Result<BinCounter, FitError> {
+    checked_axis(m.name(), m.min(), m.max(), bins, edges).map(BinCounter::from_axis)
 }
 
-/// Fits a table from `source` in two streaming passes (memory independent of the row
-/// count).
+/// Fits a table from `source` (a file, or rows in memory) in two streaming passes
+/// (memory independent of the row count): pass (a) [`FitStats`], their
+/// [`FitEdges`], pass (b) [`FitCounts`], and [`finish`], the code path of a fit
+/// merged from shards.
 ///
 /// # Errors
 ///
@@ -280,50 +324,26 @@ fn counters(
 /// [`FitError::NoLabels`] and [`FitError::EmptyClasses`] as [`class_moments`];
 /// [`FitError::Edges`] or [`FitError::OutOfF32`] for classes whose statistics a table
 /// cannot hold; [`FitError::Changed`] if the input changes between the passes.
-pub fn fit(source: &DataSource, params: &FitParams) -> Result<DynTable, FitError> {
+pub fn fit(source: &impl RowSource, params: &FitParams) -> Result<DynTable, FitError> {
     params.validate()?;
-    let (moments, bayes_moments) = pass_1(source, params.bayes.is_some())?;
-    let mut ml = counters(&moments, params.bins_ml, params.edges)?;
-    let mut map = counters(&moments, params.bins_map, params.edges)?;
-    let mut bayes = match (&bayes_moments, &params.bayes) {
-        (Some(m), Some(p)) => Some(m.counters(p.bins)?),
-        _ => None,
-    };
+    let stats = pass_a(source)?;
+    let edges = stats.edges(params)?;
+    let mut counts = FitCounts::new(&edges);
     let mut outside = false;
     source.for_each_row(|row| {
-        if let Some((c, x)) = class_value(&row) {
-            if let (Some(a), Some(b)) = (ml.get_mut(c), map.get_mut(c)) {
-                let x = x as f32;
-                let (in_a, in_b) = (a.add(x), b.add(x));
-                outside |= !(in_a && in_b);
-            }
-        }
-        if let Some(b) = &mut bayes {
-            outside |= !b.add(&row);
-        }
+        outside |= !counts.push(&row);
         Ok::<(), FitError>(())
     })?;
-    let ml: Vec<ClassHistogram> = ml.into_iter().map(BinCounter::finish).collect();
-    let map: Vec<ClassHistogram> = map.into_iter().map(BinCounter::finish).collect();
-    let same_rows = moments
-        .iter()
-        .zip(&ml)
-        .zip(&map)
-        .all(|((m, a), b)| a.total() == m.count() && b.total() == m.count());
     let changed = || FitError::Changed {
         path: source.path().to_path_buf(),
     };
-    if outside || !same_rows {
+    if outside {
         return Err(changed());
     }
-    let table = build_table(&moments, &ml, &map, params.settings())?;
-    match (bayes, params.bayes) {
-        (Some(counters), Some(p)) => {
-            let counts = counters.finish().ok_or_else(changed)?;
-            with_bayes(table, &counts, p.lambda)
-        }
-        _ => Ok(table),
-    }
+    finish(&stats, &counts).map_err(|e| match e {
+        FitError::RowsDiffer { .. } | FitError::EdgesDiffer => changed(),
+        e => e,
+    })
 }
 
 /// `table` with the Bayes head of `counts` smoothed by `lambda`.
@@ -406,9 +426,13 @@ impl TrainingSet {
     /// # Errors
     ///
     /// As [`class_moments`].
-    pub fn read(source: &DataSource) -> Result<Self, FitError> {
+    pub fn read(source: &impl RowSource) -> Result<Self, FitError> {
         require_labels(source)?;
-        let mut moments = empty_moments(source);
+        let mut moments: Vec<ClassMoments> = source
+            .classes()
+            .iter()
+            .map(|c| ClassMoments::new(c.as_str()))
+            .collect();
         let mut values: Vec<Vec<f32>> = std::vec![Vec::new(); moments.len()];
         let mut bayes = BayesMoments::new(source.classes());
         let (mut logits, mut categories) = (Vec::new(), Vec::new());
@@ -469,9 +493,11 @@ impl TrainingSet {
             };
             counters.add(&row);
         }
-        counters.finish().ok_or(FitError::Changed {
-            path: self.path.clone(),
-        })
+        counters
+            .finish(self.bayes.category_rows())
+            .ok_or(FitError::Changed {
+                path: self.path.clone(),
+            })
     }
 
     /// The training input this set was read from.

@@ -38,6 +38,10 @@ mod inspect;
 /// `demo`: the whole job in order, its files and the golden fit.
 mod demo;
 
+/// `stats` and `merge`: sharded fits in any merge order give the bytes of `fit`;
+/// mismatched, truncated, corrupt and newer statistics are refused.
+mod shards;
+
 /// Bad data and bad tables: malformed CSV and NPY inputs, missing labels, classes
 /// other than the table's, corrupted tables, data a table cannot hold, undefined
 /// metrics. Exit code 2, the file and line named, nothing written.

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use mlmap::host::fit::{BayesParams, FitParams};
 use mlmap::host::metrics::Binning;
 use mlmap::host::names::Named;
 use mlmap::host::tune::Objective;
@@ -32,6 +33,10 @@ pub struct Cli {
 pub enum Command {
     /// Fit a table from training logits.
     Fit(FitArgs),
+    /// Sharded fitting: the statistics of one shard (pass a), or with --stats its bin counts (pass b).
+    Stats(StatsArgs),
+    /// Merge the statistics or counts of shards; with --stats, write the table.
+    Merge(MergeArgs),
     /// Choose bin counts and lambdas of every head on validation data, and write the best table.
     Tune(TuneArgs),
     /// Score every row of a file through the layer and write the scores as CSV.
@@ -46,12 +51,9 @@ pub enum Command {
     ExportC(crate::cmd::export_c::ExportCArgs),
 }
 
-/// Flags of `fit`.
+/// The fit settings of `fit` and of `stats` (pass a).
 #[derive(Debug, Args)]
-pub struct FitArgs {
-    /// Training data: a CSV file or an NPY directory.
-    #[arg(long, value_name = "FILE")]
-    pub train: PathBuf,
+pub struct FitSettings {
     /// Bins of the ML histograms.
     #[arg(long, default_value_t = 22, value_name = "N")]
     pub bins_ml: usize,
@@ -94,8 +96,77 @@ pub struct FitArgs {
     /// Leave the Bayes head out (a version-1 table that older builds read).
     #[arg(long, conflicts_with_all = ["bins_bayes", "lambda_bayes"])]
     pub no_bayes: bool,
+}
+
+impl FitSettings {
+    /// The fit parameters these flags give.
+    pub fn params(&self) -> FitParams {
+        FitParams {
+            bins_ml: self.bins_ml,
+            lambda_ml: self.lambda_ml,
+            bins_map: self.bins_map,
+            lambda_map: self.lambda_map,
+            edges: self.edges,
+            upper_tail: self.upper_tail,
+            bayes: (!self.no_bayes).then_some(BayesParams {
+                bins: self.bins_bayes,
+                lambda: self.lambda_bayes,
+            }),
+        }
+    }
+}
+
+/// Flags of `fit`.
+#[derive(Debug, Args)]
+pub struct FitArgs {
+    /// Training data: a CSV file or an NPY directory.
+    #[arg(long, value_name = "FILE")]
+    pub train: PathBuf,
+    /// The fit settings.
+    #[command(flatten)]
+    pub settings: FitSettings,
     /// The table file to write.
     #[arg(long, short, value_name = "TABLE")]
+    pub output: PathBuf,
+}
+
+/// Flags of `stats`.
+#[derive(Debug, Args)]
+pub struct StatsArgs {
+    /// One shard of the training data (CSV file or NPY directory).
+    #[arg(long, value_name = "FILE")]
+    pub train: PathBuf,
+    /// Pass (b): the merged pass-(a) statistics of every shard; the shard's bin counts
+    /// are written, over the edges and with the settings recorded there.
+    #[arg(
+        long,
+        value_name = "STATS",
+        conflicts_with_all = [
+            "bins_ml", "lambda_ml", "bins_map", "lambda_map", "edges", "upper_tail",
+            "bins_bayes", "lambda_bayes", "no_bayes",
+        ]
+    )]
+    pub stats: Option<PathBuf>,
+    /// The fit settings, recorded in the pass-(a) statistics.
+    #[command(flatten)]
+    pub settings: FitSettings,
+    /// The statistics (pass a) or counts (pass b) file to write.
+    #[arg(long, short, value_name = "FILE")]
+    pub output: PathBuf,
+}
+
+/// Flags of `merge`.
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Files written by `stats`: all pass (a), or all pass (b).
+    #[arg(value_name = "FILE", required = true)]
+    pub files: Vec<PathBuf>,
+    /// The merged pass-(a) statistics the pass-(b) FILES were counted with: the table
+    /// is then written.
+    #[arg(long, value_name = "STATS")]
+    pub stats: Option<PathBuf>,
+    /// The merged file (or, with --stats, the table) to write.
+    #[arg(long, short, value_name = "FILE")]
     pub output: PathBuf,
 }
 

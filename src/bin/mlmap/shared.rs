@@ -1,9 +1,11 @@
-//! Helpers more than one command uses: reading and writing tables, writing plots.
+//! Helpers more than one command uses: reading and writing tables and fit statistics,
+//! writing plots.
 
 use std::fs;
 use std::path::Path;
 
 use mlmap::host::eval::Evaluation;
+use mlmap::host::fit::FitFile;
 use mlmap::host::names::Named;
 use mlmap::host::{plots, DynTable};
 
@@ -47,4 +49,39 @@ pub fn write_plots(ev: &Evaluation, dir: &Path, table: &DynTable) -> Result<usiz
         _ => CliError::Internal(e.to_string()),
     })?;
     Ok(written.len())
+}
+
+/// Reads a file written by `stats` or `merge` (pass-(a) statistics or pass-(b) counts),
+/// with errors naming it.
+pub fn read_fit_file(path: &Path) -> Result<FitFile> {
+    let bytes = fs::read(path).map_err(|e| CliError::input(path, e))?;
+    FitFile::from_bytes(&bytes).map_err(|e| CliError::input(path, e))
+}
+
+/// Writes serialized statistics or counts atomically, and prints what was written.
+pub fn write_fit_file(path: &Path, file: &FitFile) -> Result<()> {
+    let (bytes, what) = match file {
+        FitFile::Stats(s) => (
+            s.to_bytes(),
+            format!(
+                "pass-(a) statistics of {} rows; training rows per class: {}",
+                s.rows(),
+                s.moments()
+                    .iter()
+                    .map(|m| format!("{} {}", m.name(), m.count()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ),
+        FitFile::Counts(c) => (
+            c.to_bytes(),
+            format!("pass-(b) bin counts of {} rows", c.rows()),
+        ),
+    };
+    output::write_bytes_atomic(path, &bytes)?;
+    output::print(&format!(
+        "wrote {} ({} bytes): {what}\n",
+        path.display(),
+        bytes.len()
+    ))
 }

@@ -130,6 +130,15 @@ pub enum DataErrorKind {
         /// Rows of this array.
         found: u64,
     },
+    /// Rows held in memory: a field has another number of values than the rows need.
+    Length {
+        /// The field (`logits`, `objectness`).
+        what: &'static str,
+        /// Values needed (rows, or rows times classes).
+        expected: u64,
+        /// Values given.
+        found: u64,
+    },
     /// `classes.txt` lists another number of names than `logits.npy` has columns.
     ClassListLength {
         /// Columns of `logits.npy`.
@@ -213,6 +222,11 @@ impl fmt::Display for DataErrorKind {
             Self::RowCount { expected, found } => {
                 write!(f, "has {found} rows but logits.npy has {expected}")
             }
+            Self::Length {
+                what,
+                expected,
+                found,
+            } => write!(f, "{what} holds {found} values; {expected} are needed"),
             Self::ClassListLength { expected, found } => write!(
                 f,
                 "lists {found} class names but logits.npy has {expected} columns"

@@ -6,14 +6,14 @@
 //! are the part a fit can accumulate and merge; the smoothing `lambda` enters only when
 //! the log-terms `ln(count / n_c + lambda)` are written ([`BayesCounts::spec`]).
 
-use std::string::ToString;
+use std::string::{String, ToString};
 use std::vec::Vec;
 
 use crate::host::dataset::{Label, Row};
 use crate::host::BayesSpec;
-use crate::{EdgeMode, MAX_LAMBDA_BAYES};
+use crate::{Axis, EdgeMode, MAX_LAMBDA_BAYES};
 
-use super::stats::{BinCounter, ClassMoments};
+use super::stats::BinCounter;
 use super::{FitError, MAX_BINS};
 
 /// The hyper-parameters of the Bayes head.
@@ -76,11 +76,16 @@ pub(crate) fn category(row: &Row<'_>, k: usize) -> Option<usize> {
 }
 
 /// Pass 1 of the Bayes fit: the extremes of every logit over all labelled rows, and the
-/// rows per category.
+/// rows per category. Exact and mergeable: [`merge`](Self::merge) of the statistics of
+/// any split of the rows equals one pass over all of them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BayesMoments {
-    /// Moments of logit `j` over every labelled row (only the extremes are used).
-    logits: Vec<ClassMoments>,
+    /// The K class names (logit `j` is named after class `j` in messages).
+    names: Vec<String>,
+    /// Smallest value of logit `j` over every labelled row.
+    min: Vec<f64>,
+    /// Largest value of logit `j` over every labelled row.
+    max: Vec<f64>,
     /// Rows per category: K classes, then background.
     rows: Vec<u64>,
 }
@@ -89,34 +94,79 @@ impl BayesMoments {
     /// Empty statistics for `names` (the K class names).
     pub fn new<S: AsRef<str>>(names: &[S]) -> Self {
         Self {
-            logits: names
-                .iter()
-                .map(|n| ClassMoments::new(n.as_ref()))
-                .collect(),
+            names: names.iter().map(|n| n.as_ref().to_string()).collect(),
+            min: std::vec![f64::INFINITY; names.len()],
+            max: std::vec![f64::NEG_INFINITY; names.len()],
             rows: std::vec![0; names.len() + 1],
         }
     }
 
     /// Adds one row.
+    #[inline]
     pub fn push(&mut self, row: &Row<'_>) {
-        let k = self.logits.len();
+        let k = self.names.len();
         if let Some(c) = category(row, k) {
             if let Some(n) = self.rows.get_mut(c) {
                 *n += 1;
             }
-            for (m, &x) in self.logits.iter_mut().zip(row.logits) {
-                m.push(x);
+            for ((lo, hi), &x) in self.min.iter_mut().zip(&mut self.max).zip(row.logits) {
+                *lo = lo.min(x);
+                *hi = hi.max(x);
             }
         }
     }
 
+    /// Adds the rows of `other`, statistics of the same classes.
+    ///
+    /// # Errors
+    ///
+    /// [`FitError::ClassesDiffer`] when `other` has other class names.
+    pub fn merge(&mut self, other: &Self) -> Result<(), FitError> {
+        if self.names != other.names {
+            return Err(FitError::ClassesDiffer {
+                ours: self.names.clone(),
+                theirs: other.names.clone(),
+            });
+        }
+        for (a, &b) in self.min.iter_mut().zip(&other.min) {
+            *a = a.min(b);
+        }
+        for (a, &b) in self.max.iter_mut().zip(&other.max) {
+            *a = a.max(b);
+        }
+        for (a, &b) in self.rows.iter_mut().zip(&other.rows) {
+            *a = a.saturating_add(b);
+        }
+        Ok(())
+    }
+
     /// Rows per category, with the background category only when it has rows.
     pub fn category_rows(&self) -> &[u64] {
-        let k = self.logits.len();
+        let k = self.names.len();
         match self.rows.get(k) {
             Some(0) => self.rows.get(..k).unwrap_or(&[]),
             _ => &self.rows,
         }
+    }
+
+    /// Smallest and largest value of each logit over the labelled rows (`+inf`,
+    /// `-inf` when there are none).
+    pub fn extremes(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.min.iter().copied().zip(self.max.iter().copied())
+    }
+
+    /// The axis of each logit with `bins` linspace bins.
+    ///
+    /// # Errors
+    ///
+    /// [`FitError::OutOfF32`] or [`FitError::Edges`] for a logit whose range a table
+    /// cannot hold.
+    pub(crate) fn axes(&self, bins: usize) -> Result<Vec<Axis>, FitError> {
+        self.names
+            .iter()
+            .zip(self.extremes())
+            .map(|(name, (lo, hi))| super::checked_axis(name, lo, hi, bins, EdgeMode::Linspace))
+            .collect()
     }
 
     /// The counters of pass 2, one per category and logit, over the axes of `bins`
@@ -124,22 +174,40 @@ impl BayesMoments {
     ///
     /// # Errors
     ///
-    /// [`FitError::OutOfF32`] or [`FitError::Edges`] for a logit whose range a table
-    /// cannot hold.
+    /// As [`axes`](Self::axes).
     pub(crate) fn counters(&self, bins: usize) -> Result<BayesCounters, FitError> {
-        let mut axes = Vec::with_capacity(self.logits.len());
-        for m in &self.logits {
-            axes.push(super::counter_for(m, bins, EdgeMode::Linspace)?);
-        }
-        let categories = self.category_rows().len();
-        let mut counters = Vec::with_capacity(categories * axes.len());
-        for _ in 0..categories {
-            counters.extend(axes.iter().cloned());
-        }
-        Ok(BayesCounters {
-            k: self.logits.len(),
-            rows: self.category_rows().to_vec(),
-            counters,
+        Ok(BayesCounters::new(
+            self.category_rows().len(),
+            &self.axes(bins)?,
+        ))
+    }
+
+    /// The serialized form: `(min, max, rows)`.
+    pub(crate) fn to_parts(&self) -> (Vec<f64>, Vec<f64>, Vec<u64>) {
+        (self.min.clone(), self.max.clone(), self.rows.clone())
+    }
+
+    /// The statistics of `names` from [`to_parts`](Self::to_parts); `None` when the
+    /// parts do not fit the names.
+    pub(crate) fn from_parts(
+        names: &[String],
+        min: Vec<f64>,
+        max: Vec<f64>,
+        rows: Vec<u64>,
+    ) -> Option<Self> {
+        let k = names.len();
+        let ok = min.len() == k
+            && max.len() == k
+            && rows.len() == k + 1
+            && min.iter().zip(&max).all(|(a, b)| {
+                (a.is_finite() && b.is_finite() && a <= b)
+                    || (*a == f64::INFINITY && *b == f64::NEG_INFINITY)
+            });
+        ok.then(|| Self {
+            names: names.to_vec(),
+            min,
+            max,
+            rows,
         })
     }
 }
@@ -148,20 +216,33 @@ impl BayesMoments {
 #[derive(Debug, Clone)]
 pub(crate) struct BayesCounters {
     k: usize,
-    rows: Vec<u64>,
+    categories: usize,
     /// Category-major: counter `c * K + j`.
     counters: Vec<BinCounter>,
 }
 
 impl BayesCounters {
-    /// Counts one row; `false` when a value falls outside its axis (the data changed
-    /// since pass 1).
+    /// Counters for `categories` categories over `axes` (one per logit).
+    pub(crate) fn new(categories: usize, axes: &[Axis]) -> Self {
+        let mut counters = Vec::with_capacity(categories * axes.len());
+        for _ in 0..categories {
+            counters.extend(axes.iter().map(|&a| BinCounter::from_axis(a)));
+        }
+        Self {
+            k: axes.len(),
+            categories,
+            counters,
+        }
+    }
+
+    /// Counts one row; `false` when a value falls outside its axis, or the row is
+    /// background and the axes were made without a background category.
+    #[inline]
     pub(crate) fn add(&mut self, row: &Row<'_>) -> bool {
         let Some(c) = category(row, self.k) else {
             return true;
         };
-        if c >= self.rows.len() {
-            // A background row that pass 1 did not see.
+        if c >= self.categories {
             return false;
         }
         let start = c * self.k;
@@ -172,8 +253,32 @@ impl BayesCounters {
         inside
     }
 
-    /// The counts, checked against the rows of pass 1.
-    pub(crate) fn finish(self) -> Option<BayesCounts> {
+    /// The counts of every counter, category-major.
+    pub(crate) fn counts(&self) -> Vec<u64> {
+        self.counters
+            .iter()
+            .flat_map(|c| c.counts().iter().copied())
+            .collect()
+    }
+
+    /// Adds counts laid out as [`counts`](Self::counts); `false` when their number
+    /// differs.
+    pub(crate) fn add_counts(&mut self, counts: &[u64]) -> bool {
+        let bins = self.counters.first().map_or(0, BinCounter::bins);
+        if counts.len() != bins * self.counters.len() {
+            return false;
+        }
+        self.counters
+            .iter_mut()
+            .zip(counts.chunks(bins.max(1)))
+            .all(|(c, o)| c.add_counts(o))
+    }
+
+    /// The counts, checked against `rows`, the rows per category of pass 1.
+    pub(crate) fn finish(self, rows: &[u64]) -> Option<BayesCounts> {
+        if rows.len() != self.categories {
+            return None;
+        }
         let bins = self.counters.first().map_or(0, BinCounter::bins);
         let mut ranges = Vec::with_capacity(self.k);
         let mut counts = Vec::with_capacity(self.counters.len() * bins);
@@ -182,7 +287,7 @@ impl BayesCounters {
             if i < self.k {
                 ranges.push((h.lo(), h.hi()));
             }
-            if h.total() != *self.rows.get(i / self.k)? {
+            if h.total() != *rows.get(i / self.k.max(1))? {
                 return None;
             }
             counts.extend_from_slice(h.counts());
@@ -191,7 +296,7 @@ impl BayesCounters {
             k: self.k,
             bins,
             ranges,
-            rows: self.rows,
+            rows: rows.to_vec(),
             counts,
         })
     }

@@ -61,6 +61,31 @@ pub enum FitError {
     },
     /// The fitted statistics break a table invariant.
     Table(TableError),
+    /// Statistics of other classes cannot be merged or combined.
+    ClassesDiffer {
+        /// The classes of the statistics merged into.
+        ours: Vec<String>,
+        /// The classes of the other statistics.
+        theirs: Vec<String>,
+    },
+    /// Statistics recorded with other fit settings cannot be merged or combined.
+    ParamsDiffer,
+    /// The bin counts were made with other edges than those of the statistics (pass
+    /// (b) over edges of another pass (a)), or counts of other edges were merged.
+    EdgesDiffer,
+    /// The bin counts cover another number of rows than the statistics: the shards of
+    /// pass (b) are not those of pass (a).
+    RowsDiffer {
+        /// Rows in the statistics (pass (a)).
+        stats: u64,
+        /// Rows in the counts (pass (b)).
+        counts: u64,
+    },
+    /// Serialized statistics or counts cannot be decoded.
+    Format {
+        /// What is wrong with the bytes.
+        reason: String,
+    },
 }
 
 impl FitError {
@@ -74,7 +99,12 @@ impl FitError {
             | Self::NoLabels { .. }
             | Self::EmptyClasses { .. }
             | Self::Edges { .. }
-            | Self::OutOfF32 { .. } => true,
+            | Self::OutOfF32 { .. }
+            | Self::ClassesDiffer { .. }
+            | Self::ParamsDiffer
+            | Self::EdgesDiffer
+            | Self::RowsDiffer { .. }
+            | Self::Format { .. } => true,
         }
     }
 }
@@ -130,6 +160,27 @@ impl fmt::Display for FitError {
                 path.display()
             ),
             Self::Table(e) => write!(f, "the fitted table is invalid: {e}"),
+            Self::ClassesDiffer { ours, theirs } => write!(
+                f,
+                "statistics of classes [{}] cannot be combined with statistics of classes \
+                 [{}] (same names, same order needed)",
+                ours.join(", "),
+                theirs.join(", ")
+            ),
+            Self::ParamsDiffer => f.write_str(
+                "the statistics were recorded with other fit settings (bins, lambdas, edges, \
+                 tail or Bayes head); every shard must use the same settings",
+            ),
+            Self::EdgesDiffer => f.write_str(
+                "the bin counts were made with the edges of other statistics; count every \
+                 shard with the edges of the merged pass-(a) statistics",
+            ),
+            Self::RowsDiffer { stats, counts } => write!(
+                f,
+                "the bin counts cover {counts} rows but the statistics {stats}: the shards of \
+                 pass (b) are not those of pass (a)"
+            ),
+            Self::Format { reason } => write!(f, "not valid fit statistics: {reason}"),
         }
     }
 }

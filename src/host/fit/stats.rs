@@ -6,22 +6,54 @@ use std::vec::Vec;
 use crate::{Axis, EdgeMode, VARIANCE_FLOOR};
 
 use super::binpicker;
+use super::exact::{self, Fixed, Sums};
+
+/// The exact state of a [`ClassMoments`] in canonical form (the serialized form).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub(crate) struct MomentParts {
+    pub(crate) count: u64,
+    pub(crate) min: f64,
+    pub(crate) max: f64,
+    pub(crate) non_finite: bool,
+    pub(crate) sum: (u32, Vec<i64>),
+    pub(crate) squares: (u32, Vec<i64>),
+}
 
 /// Count, extremes, mean and variance of one class's training logits `v_c`
-/// (DESIGN §1.1), accumulated in `f64` one value at a time.
+/// (DESIGN §1.1), accumulated one value at a time, and mergeable.
 ///
-/// The mean and variance are updated with Welford's method, which stays accurate
-/// when the mean is large compared with the spread (no `sum x^2 - n mean^2`
-/// cancellation).
+/// The state is exact: the count, the extremes, and the **exact** sum and sum of
+/// squares of the values (fixed-point accumulators, no rounding). So it does not depend
+/// on the order of the values, [`merge`](Self::merge) of the statistics of any split of
+/// the values gives the same state as one pass over all of them, and the mean and
+/// variance are a deterministic function of it: each the exact rational
+/// (`S1 / n`, `(n S2 - S1^2) / (n (n - 1))`) rounded once to `f64`, so no cancellation
+/// however large the mean is compared with the spread.
+///
+/// ```
+/// use mlmap::host::fit::ClassMoments;
+///
+/// let (mut all, mut a, mut b) = (ClassMoments::new("car"), ClassMoments::new("car"), ClassMoments::new("car"));
+/// for x in [1e9, 1e9 + 1.0, 1e9 + 2.0] {
+///     all.push(x);
+/// }
+/// a.push(1e9 + 2.0);
+/// b.push(1e9);
+/// b.push(1e9 + 1.0);
+/// a.merge(&b);
+/// assert_eq!(a, all);
+/// assert_eq!((all.mean(), all.sample_variance()), (1e9 + 1.0, 1.0));
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClassMoments {
     name: String,
     count: u64,
     min: f64,
     max: f64,
-    mean: f64,
-    /// Sum of squared deviations from the running mean.
-    m2: f64,
+    /// Whether a NaN or infinite value was pushed (the mean and variance are then NaN).
+    non_finite: bool,
+    /// Exact sums of the values and of their squares.
+    sums: std::boxed::Box<Sums>,
 }
 
 impl ClassMoments {
@@ -32,19 +64,70 @@ impl ClassMoments {
             count: 0,
             min: f64::INFINITY,
             max: f64::NEG_INFINITY,
-            mean: 0.0,
-            m2: 0.0,
+            non_finite: false,
+            sums: std::boxed::Box::default(),
         }
     }
 
-    /// Adds one value (finite, as every logit of a [`DataSource`](crate::host::dataset::DataSource)).
+    /// Adds one value (finite, as every logit of a [`DataSource`](crate::host::dataset::DataSource);
+    /// a NaN or infinite value makes the mean and variance NaN).
+    #[inline]
     pub fn push(&mut self, x: f64) {
         self.count += 1;
         self.min = self.min.min(x);
         self.max = self.max.max(x);
-        let delta = x - self.mean;
-        self.mean += delta / self.count as f64;
-        self.m2 += delta * (x - self.mean);
+        match exact::split(x) {
+            Some((negative, m, pos)) => self.sums.add(negative, m, pos),
+            None => self.non_finite = true,
+        }
+    }
+
+    /// Adds the values of `other` (its name is not checked): the same state as pushing
+    /// them one by one.
+    pub fn merge(&mut self, other: &Self) {
+        self.count = self.count.saturating_add(other.count);
+        self.min = self.min.min(other.min);
+        self.max = self.max.max(other.max);
+        self.non_finite |= other.non_finite;
+        self.sums.merge(&other.sums);
+    }
+
+    /// The exact state in canonical form, for serialization.
+    pub(crate) fn to_parts(&self) -> MomentParts {
+        let (sum, squares) = self.sums.exact();
+        MomentParts {
+            count: self.count,
+            min: self.min,
+            max: self.max,
+            non_finite: self.non_finite,
+            sum: sum.to_words(),
+            squares: squares.to_words(),
+        }
+    }
+
+    /// The statistics of class `name` from [`to_parts`](Self::to_parts); `None` when
+    /// the parts are inconsistent.
+    pub(crate) fn from_parts(name: String, p: &MomentParts) -> Option<Self> {
+        let empty = p.count == 0;
+        let extremes_ok = if empty {
+            p.min == f64::INFINITY && p.max == f64::NEG_INFINITY
+        } else {
+            !(p.min.is_nan() || p.max.is_nan()) && p.min <= p.max
+        };
+        if !extremes_ok || (empty && (!p.sum.1.is_empty() || !p.squares.1.is_empty())) {
+            return None;
+        }
+        Some(Self {
+            name,
+            count: p.count,
+            min: p.min,
+            max: p.max,
+            non_finite: p.non_finite,
+            sums: std::boxed::Box::new(Sums::from_exact(
+                Fixed::from_words(p.sum.0, &p.sum.1)?,
+                Fixed::from_words(p.squares.0, &p.squares.1)?,
+            )),
+        })
     }
 
     /// The class name.
@@ -67,19 +150,22 @@ impl ClassMoments {
         self.max
     }
 
-    /// Mean of the values (0 when empty).
+    /// Mean of the values (0 when empty): the exact mean rounded to `f64`.
     pub fn mean(&self) -> f64 {
-        self.mean
+        if self.non_finite {
+            return f64::NAN;
+        }
+        exact::mean(self.count, &self.sums.exact().0)
     }
 
     /// Sample variance (`ddof = 1`, as MATLAB's `fitdist(x, 'Normal')`); 0 with fewer
-    /// than 2 values.
+    /// than 2 values. The exact variance of the values rounded to `f64`.
     pub fn sample_variance(&self) -> f64 {
-        if self.count < 2 {
-            0.0
-        } else {
-            self.m2 / (self.count - 1) as f64
+        if self.non_finite {
+            return f64::NAN;
         }
+        let (sum, squares) = self.sums.exact();
+        exact::sample_variance(self.count, &sum, &squares)
     }
 
     /// The variance written to the table: [`sample_variance`](Self::sample_variance)
@@ -101,19 +187,25 @@ impl ClassMoments {
     /// Rounding to `f32` is monotonic, so every training value, rounded to `f32`,
     /// lies in the returned range.
     pub fn range(&self, bins: usize, edges: EdgeMode) -> (f32, f32) {
-        match edges {
-            EdgeMode::Linspace => {
-                let (lo, hi) = (self.min as f32, self.max as f32);
-                if lo < hi {
-                    (lo, hi)
-                } else {
-                    ((self.min - 0.5) as f32, (self.max + 0.5) as f32)
-                }
+        range(self.min, self.max, bins, edges)
+    }
+}
+
+/// The outer edges of a histogram of values in `[min, max]` (see
+/// [`ClassMoments::range`]).
+pub(crate) fn range(min: f64, max: f64, bins: usize, edges: EdgeMode) -> (f32, f32) {
+    match edges {
+        EdgeMode::Linspace => {
+            let (lo, hi) = (min as f32, max as f32);
+            if lo < hi {
+                (lo, hi)
+            } else {
+                ((min - 0.5) as f32, (max + 0.5) as f32)
             }
-            EdgeMode::Matlab => {
-                let p = binpicker::pick(self.min, self.max, bins);
-                (p.left as f32, p.right as f32)
-            }
+        }
+        EdgeMode::Matlab => {
+            let p = binpicker::pick(min, max, bins);
+            (p.left as f32, p.right as f32)
         }
     }
 }
@@ -176,16 +268,39 @@ pub(crate) struct BinCounter {
 impl BinCounter {
     /// A counter over `[lo, hi]` with `bins` bins, or `None` when those edges are not
     /// valid for a table (not finite, or inner edges not strictly increasing in `f32`).
+    #[cfg(test)]
     pub(crate) fn new(lo: f32, hi: f32, bins: usize) -> Option<Self> {
-        Some(Self {
-            shape: Axis::new(lo, hi, bins).ok()?,
-            counts: std::vec![0; bins],
-        })
+        Some(Self::from_axis(Axis::new(lo, hi, bins).ok()?))
+    }
+
+    /// A counter over the bins of `axis`.
+    pub(crate) fn from_axis(axis: Axis) -> Self {
+        Self {
+            shape: axis,
+            counts: std::vec![0; axis.bins()],
+        }
     }
 
     /// Number of bins.
     pub(crate) fn bins(&self) -> usize {
         self.counts.len()
+    }
+
+    /// The counts so far.
+    pub(crate) fn counts(&self) -> &[u64] {
+        &self.counts
+    }
+
+    /// Adds counts of the same bins; `false` (and nothing added) when their number
+    /// differs.
+    pub(crate) fn add_counts(&mut self, counts: &[u64]) -> bool {
+        if counts.len() != self.counts.len() {
+            return false;
+        }
+        for (c, &o) in self.counts.iter_mut().zip(counts) {
+            *c = c.saturating_add(o);
+        }
+        true
     }
 
     /// Counts `x`; `false` when it is outside `[lo, hi]`.
@@ -270,7 +385,7 @@ mod tests {
     }
 
     #[test]
-    fn welford_is_stable_far_from_zero() {
+    fn variance_is_exact_far_from_zero() {
         // Values 1e9 + {0, 1, 2}: sample variance exactly 1.
         let mut m = ClassMoments::new("a");
         for x in [1e9, 1e9 + 1.0, 1e9 + 2.0] {

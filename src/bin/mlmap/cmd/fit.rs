@@ -1,7 +1,7 @@
 //! `mlmap fit`: fit a table from training logits (DESIGN §1.1).
 
 use mlmap::host::data;
-use mlmap::host::fit::{self, FitParams};
+use mlmap::host::fit;
 
 use crate::args::FitArgs;
 use crate::error::{fit_error, Result};
@@ -10,18 +10,7 @@ use crate::report::table_summary;
 use crate::shared::write_table;
 
 pub fn run(args: &FitArgs) -> Result<()> {
-    let params = FitParams {
-        bins_ml: args.bins_ml,
-        lambda_ml: args.lambda_ml,
-        bins_map: args.bins_map,
-        lambda_map: args.lambda_map,
-        edges: args.edges,
-        upper_tail: args.upper_tail,
-        bayes: (!args.no_bayes).then_some(fit::BayesParams {
-            bins: args.bins_bayes,
-            lambda: args.lambda_bayes,
-        }),
-    };
+    let params = args.settings.params();
     let train = &args.train;
     params.validate().map_err(|e| fit_error(train, e))?;
     output::check_outputs(&args.output, &[train])?;

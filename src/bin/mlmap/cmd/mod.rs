@@ -8,6 +8,8 @@ pub mod eval;
 pub mod export_c;
 pub mod fit;
 pub mod inspect;
+pub mod merge;
+pub mod stats;
 pub mod tune;
 
 use crate::args::{Cli, Command};
@@ -17,6 +19,8 @@ use crate::error::Result;
 pub fn run(cli: Cli) -> Result<()> {
     match &cli.command {
         Command::Fit(a) => fit::run(a),
+        Command::Stats(a) => stats::run(a),
+        Command::Merge(a) => merge::run(a),
         Command::Tune(a) => tune::run(a),
         Command::Apply(a) => apply::run(a),
         Command::Eval(a) => eval::run(a),
