@@ -12,8 +12,7 @@ use std::path::Path;
 
 use mlmap::host::dataset::{DataError, DataErrorKind, RowSource};
 use mlmap::host::fit::{
-    self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitParams, FitStats,
-    TrainingSet,
+    self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitParams, FitStats, TrainingSet,
 };
 use mlmap::host::names::Named;
 use mlmap::host::tune::{self as host_tune, BayesGrid, Guards, Objective, TuneParams};
@@ -156,7 +155,10 @@ fn check_class_names(names: &[String]) -> PyResult<()> {
             return refuse(DataErrorKind::ReservedClassName, Some(name));
         }
         if name.len() > mlmap::NAME_MAX {
-            return refuse(DataErrorKind::ClassNameTooLong { len: name.len() }, Some(name));
+            return refuse(
+                DataErrorKind::ClassNameTooLong { len: name.len() },
+                Some(name),
+            );
         }
         if names.get(..i).is_some_and(|seen| seen.contains(name)) {
             return refuse(DataErrorKind::DuplicateColumn, Some(name));
@@ -335,10 +337,7 @@ macro_rules! mergeable {
                         inner: self.inner.clone(),
                     }),
                     Err(_) => Err(PyTypeError::new_err(concat!(
-                        "only ",
-                        $what,
-                        " add to ",
-                        $what
+                        "only ", $what, " add to ", $what
                     ))),
                 }
             }
@@ -641,9 +640,12 @@ pub fn tune<'py>(
         max_accuracy_loss,
         max_map_loss,
     };
-    guards
-        .validate()
-        .map_err(|e| value_error(e.replace("--max-accuracy-loss", "max_accuracy_loss").replace("--max-map-loss", "max_map_loss")))?;
+    guards.validate().map_err(|e| {
+        value_error(
+            e.replace("--max-accuracy-loss", "max_accuracy_loss")
+                .replace("--max-map-loss", "max_map_loss"),
+        )
+    })?;
     let params = TuneParams {
         bins: vec![
             (Head::Ml, grid(bins_ml, "bins_ml")?),
