@@ -17,6 +17,7 @@ Only statistics, edges and counts (a few KiB each) cross process boundaries; the
 where they are read.
 
     python examples/dask_fit.py [SHARDS_DIR] [--workers 2] [--output table.mlmap]
+    python examples/dask_fit.py --bench-rows 10000000    # 8 shards of tools/bench_data.py rows
 
 Without SHARDS_DIR, the shipped training data (examples/data/train.csv) is written as 8
 shards into a temporary directory first. The fit settings are those of `mlmap.fit`
@@ -61,6 +62,13 @@ def counts_of(path, edges):
     """Pass (b) of one shard over the broadcast edges."""
     logits, labels, objectness, _ = read_shard(path)
     return mlmap.FitCounts(edges, logits, labels, objectness)
+
+
+def peak_rss_kib():
+    """This process's peak resident memory (Linux: KiB)."""
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
 
 
 def tree_reduce(client, futures):
@@ -112,6 +120,29 @@ def write_shards(out, parts=8, source=ROOT / "examples" / "data" / "train.csv"):
     return paths
 
 
+def bench_shards(rows, parts=8):
+    """`parts` shards of `rows` rows drawn like the training data (tools/bench_data.py),
+    written once under target/bench-data/."""
+    sys.path.insert(0, str(ROOT / "tools"))
+    import bench_data
+
+    whole = ROOT / "target" / "bench-data" / f"{rows}"
+    if not (whole / "classes.txt").exists():
+        bench_data.write(rows, str(whole))
+    out = ROOT / "target" / "bench-data" / f"shards-{rows}"
+    paths = [out / f"shard-{i:03d}" for i in range(parts)]
+    if not all((p / "classes.txt").exists() for p in paths):
+        arrays = {n: np.load(whole / n, mmap_mode="r")
+                  for n in ("logits.npy", "labels.npy", "objectness.npy")}
+        for i, p in enumerate(paths):
+            p.mkdir(parents=True, exist_ok=True)
+            lo, hi = i * rows // parts, (i + 1) * rows // parts
+            for name, a in arrays.items():
+                np.save(p / name, a[lo:hi])
+            (p / "classes.txt").write_text((whole / "classes.txt").read_text())
+    return paths
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("shards", nargs="?", help="a directory of NPY shard directories")
@@ -119,12 +150,16 @@ def main(argv=None):
     p.add_argument("--output", default="dask-fit.mlmap")
     p.add_argument("--no-bayes", action="store_true")
     p.add_argument("--edges", default="linspace", choices=["linspace", "matlab"])
+    p.add_argument("--bench-rows", type=int, default=0,
+                   help="write 8 shards of N rows of tools/bench_data.py (under target/) and fit them")
     a = p.parse_args(argv)
 
     from dask.distributed import Client, LocalCluster
 
     with tempfile.TemporaryDirectory() as tmp:
-        if a.shards:
+        if a.bench_rows:
+            shards = bench_shards(a.bench_rows)
+        elif a.shards:
             shards = sorted(q for q in pathlib.Path(a.shards).iterdir() if q.is_dir())
         else:
             shards = write_shards(tmp)
@@ -139,9 +174,13 @@ def main(argv=None):
                 settings["bayes"] = None
             table = fit_shards(client, shards, **settings)
             took = time.perf_counter() - t0
+            peaks = client.run(peak_rss_kib)
         table.save(a.output)
-        print(f"fitted {len(shards)} shards on {a.workers} workers in {took:.2f} s: "
-              f"{a.output} ({table.size} bytes), training rows {table.training_rows}")
+        rows = sum(len(np.load(pathlib.Path(q) / "labels.npy", mmap_mode="r")) for q in shards)
+        print(f"fitted {len(shards)} shards ({rows} rows) on {a.workers} workers in "
+              f"{took:.2f} s: {rows / took / a.workers / 1e6:.2f} M rows/s per worker; "
+              f"peak RSS per worker {sorted(peaks.values())} KiB")
+        print(f"{a.output} ({table.size} bytes), training rows {table.training_rows}")
     return table
 
 

@@ -1,7 +1,7 @@
 """Type stubs of the extension module `mlmap._mlmap` (re-exported by `mlmap`)."""
 
 import os
-from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -21,6 +21,7 @@ PathLike = Union[str, "os.PathLike[str]"]
 class TableError(ValueError):
     """A table that does not decode or breaks a table invariant."""
 
+@final
 class Table:
     """A fitted mlmap table (any number of classes and bins), immutable.
 
@@ -90,7 +91,7 @@ class Table:
         self, head: HeadName, logits: Logits, objectness: Objectness = None
     ) -> npt.NDArray[np.float32]:
         """The scores of `head`, as `ml`."""
-    def __eq__(self, other: object) -> bool: ...
+    def __eq__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
     def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
 
@@ -110,3 +111,127 @@ def evaluate(
     classes: Optional[Sequence[str]] = None,
 ) -> Dict[str, Any]:
     """Every metric of every method, as `mlmap eval --format json` reports them."""
+
+#: The `bayes` keyword: `True` (the default head: 22 bins, lambda 1e-3), `False` or
+#: `None` (no Bayes head), or `{"bins": int, "lambda": float}`.
+BayesSetting = Union[bool, None, Dict[str, Union[int, float]]]
+
+def fit(
+    logits: Logits,
+    labels: Labels,
+    objectness: Objectness = None,
+    *,
+    classes: Optional[Sequence[str]] = None,
+    bins_ml: int = 22,
+    lambda_ml: Optional[float] = None,
+    bins_map: int = 17,
+    lambda_map: Optional[float] = None,
+    edges: Literal["linspace", "matlab"] = "linspace",
+    tail: Literal["zero", "clamp"] = "zero",
+    bayes: BayesSetting = True,
+) -> Table:
+    """Fits a table (the bytes `mlmap fit` writes on the same rows). Lambdas default to
+    0.0055 (ML) and 0.00012 (MAP); classes to `class0` .. `class{K-1}`."""
+
+def tune(
+    logits: Logits,
+    labels: Labels,
+    val: Sequence[Any],
+    objectness: Objectness = None,
+    *,
+    ood: Optional[Union[Logits, Sequence[Any]]] = None,
+    classes: Optional[Sequence[str]] = None,
+    objective: Literal["ece", "nll", "brier"] = "ece",
+    bins_ml: Optional[Sequence[int]] = None,
+    bins_map: Optional[Sequence[int]] = None,
+    bins_bayes: Optional[Sequence[int]] = None,
+    bayes: bool = True,
+    lambda_min: float = 1e-8,
+    lambda_max: float = 1e-1,
+    lambdas_per_decade: int = 3,
+    lambda_bayes_min: Optional[float] = None,
+    lambda_bayes_max: Optional[float] = None,
+    max_accuracy_loss: float = 0.005,
+    max_map_loss: float = 0.01,
+    edges: Literal["linspace", "matlab"] = "linspace",
+    tail: Literal["zero", "clamp"] = "zero",
+    top: int = 5,
+) -> Tuple[Table, Dict[str, Any]]:
+    """Searches bins (default 4..40 per head) and lambdas on `val=(logits, labels[,
+    objectness])`; returns the table and the report of `mlmap tune --format json`."""
+
+@final
+class FitStats:
+    """Pass (a) of a fit over some rows; merges exactly (`merge`, `+`, `sum`), pickles."""
+
+    def __new__(
+        cls,
+        logits: Logits,
+        labels: Labels,
+        objectness: Objectness = None,
+        *,
+        classes: Optional[Sequence[str]] = None,
+    ) -> "FitStats": ...
+    @classmethod
+    def empty(cls, classes: Sequence[str]) -> "FitStats": ...
+    @property
+    def classes(self) -> List[str]: ...
+    @property
+    def rows(self) -> int: ...
+    @property
+    def class_rows(self) -> List[int]: ...
+    def edges(
+        self,
+        *,
+        bins_ml: int = 22,
+        lambda_ml: Optional[float] = None,
+        bins_map: int = 17,
+        lambda_map: Optional[float] = None,
+        edges: Literal["linspace", "matlab"] = "linspace",
+        tail: Literal["zero", "clamp"] = "zero",
+        bayes: BayesSetting = True,
+    ) -> "FitEdges":
+        """The edges pass (b) counts against, for a fit with these settings."""
+    def finish(self, counts: "FitCounts") -> Table: ...
+    def merge(self, other: "FitStats") -> "FitStats": ...
+    def __add__(self, other: Union["FitStats", int], /) -> "FitStats": ...
+    def __radd__(self, other: Union["FitStats", int], /) -> "FitStats": ...
+    def to_bytes(self) -> bytes: ...
+    @staticmethod
+    def from_bytes(data: Union[bytes, bytearray]) -> "FitStats": ...
+    def __eq__(self, other: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+
+@final
+class FitEdges:
+    """The edges of every histogram and the fit settings; pickles."""
+
+    @property
+    def classes(self) -> List[str]: ...
+    def to_bytes(self) -> bytes: ...
+    @staticmethod
+    def from_bytes(data: Union[bytes, bytearray]) -> "FitEdges": ...
+    def __eq__(self, other: object, /) -> bool: ...
+
+@final
+class FitCounts:
+    """Pass (b) of a fit over some rows; merges by addition, pickles."""
+
+    def __new__(
+        cls, edges: FitEdges, logits: Logits, labels: Labels, objectness: Objectness = None
+    ) -> "FitCounts": ...
+    @classmethod
+    def empty(cls, edges: FitEdges) -> "FitCounts": ...
+    @property
+    def rows(self) -> int: ...
+    def merge(self, other: "FitCounts") -> "FitCounts": ...
+    def __add__(self, other: Union["FitCounts", int], /) -> "FitCounts": ...
+    def __radd__(self, other: Union["FitCounts", int], /) -> "FitCounts": ...
+    def to_bytes(self) -> bytes: ...
+    @staticmethod
+    def from_bytes(data: Union[bytes, bytearray]) -> "FitCounts": ...
+    def __eq__(self, other: object, /) -> bool: ...
+    def __hash__(self) -> int: ...
+
+def finish(stats: FitStats, counts: FitCounts) -> Table:
+    """The table of merged statistics and merged counts of the same rows."""
