@@ -168,6 +168,7 @@ def main(argv=None):
         # the workers are the parallelism.
         with LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True,
                           env={"RAYON_NUM_THREADS": "1"}) as cluster, Client(cluster) as client:
+            idle = client.run(peak_rss_kib)
             t0 = time.perf_counter()
             settings = {"edges": a.edges}
             if a.no_bayes:
@@ -179,7 +180,8 @@ def main(argv=None):
         rows = sum(len(np.load(pathlib.Path(q) / "labels.npy", mmap_mode="r")) for q in shards)
         print(f"fitted {len(shards)} shards ({rows} rows) on {a.workers} workers in "
               f"{took:.2f} s: {rows / took / a.workers / 1e6:.2f} M rows/s per worker; "
-              f"peak RSS per worker {sorted(peaks.values())} KiB")
+              f"peak RSS per worker {sorted(peaks.values())} KiB "
+              f"(before the fit {sorted(idle.values())} KiB)")
         print(f"{a.output} ({table.size} bytes), training rows {table.training_rows}")
     return table
 

@@ -4,7 +4,7 @@
     python python/bench/bench_vs_numpy.py fit   [--rows N] [--repeat R]
 
 Data: `tools/bench_data.py` (rows drawn like the shipped training data), written once
-under `target/bench-data/` and memory-mapped; the arrays are loaded into memory before
+under `target/bench-data/`; the arrays are loaded into memory before
 anything is timed. numpy's side is `tools/numpy_layer.py`, the repository's reference
 "as a Python user would write it": `Layer` (Algorithm 1 vectorised, float32) for scoring,
 `fit_stats` (per class `np.histogram` per head, mean, var) for fitting, plus the same for
@@ -12,8 +12,8 @@ the Bayes head's histograms (per category and logit) when the fit has that head.
 
 Every figure is the best of R wall times in this process; mlmap and numpy alternate.
 `RAYON_NUM_THREADS=1` pins the package to one core. Peak memory: `fit --memory` runs
-`mlmap.fit` alone in a child process and reports its peak RSS against the size of the
-input arrays.
+`mlmap.fit` in a child process that holds the arrays, and reports how far its peak RSS
+rises above the RSS it had before the fit, against the size of the input arrays.
 """
 
 import argparse
@@ -119,23 +119,30 @@ def cmd_fit(a):
 
 
 def fit_memory(a, x, labels, os_):
-    """Peak RSS of a child that loads the arrays, then fits; against the arrays' size."""
+    """Peak RSS of a child while it fits: the arrays are loaded, the peak is reset
+    (Linux: `/proc/self/clear_refs`), `mlmap.fit` runs, and the new peak is read
+    (`VmHWM`); against the input arrays' size."""
     code = f"""
-import resource, sys, numpy as np, mlmap
+import sys, numpy as np, mlmap
 sys.path.insert(0, {os.path.join(ROOT, 'tools')!r})
 import bench_data
 d = {os.path.join(ROOT, 'target', 'bench-data', str(a.rows))!r}
 x, y, o = (np.load(d + '/' + n) for n in ('logits.npy', 'labels.npy', 'objectness.npy'))
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+def status(key):
+    for line in open('/proc/self/status'):
+        if line.startswith(key + ':'):
+            return int(line.split()[1])
+with open('/proc/self/clear_refs', 'w') as f:
+    f.write('5')
+before = status('VmRSS')
 t = mlmap.fit(x, y, o, classes=bench_data.gen_data.CLASSES)
-peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-print(base, peak)
+print(before, status('VmHWM'))
 """
-    base, peak = map(int, subprocess.check_output([sys.executable, "-c", code]).split())
+    before, peak = map(int, subprocess.check_output([sys.executable, "-c", code]).split())
     size = (x.nbytes + labels.nbytes + os_.nbytes) / 1024
-    print(f"fit memory: {a.rows} rows; input arrays {size:,.0f} KiB; peak RSS after loading "
-          f"{base:,} KiB, after mlmap.fit {peak:,} KiB: the fit added {peak - base:,} KiB "
-          f"({(peak - base) / size:.2%} of the input)")
+    print(f"fit memory: {a.rows} rows; input arrays {size:,.0f} KiB; RSS before mlmap.fit "
+          f"{before:,} KiB (interpreter, numpy and the arrays), peak during it {peak:,} KiB: "
+          f"+{peak - before:,} KiB ({(peak - before) / size:.2%} of the input arrays)")
 
 
 def main():
