@@ -20,6 +20,9 @@ if ! python3 -m venv "$venv" 2>/dev/null; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
     python3 -m venv "$venv"
 fi
+echo "cargo fmt --check and clippy of python/ (its own workspace)"
+cargo fmt --manifest-path python/Cargo.toml --check
+cargo clippy --manifest-path python/Cargo.toml --quiet -- -D warnings
 "$venv/bin/python" --version
 "$venv/bin/pip" install -q "maturin>=1.9,<2" -r python/requirements-test.txt
 
