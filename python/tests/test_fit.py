@@ -257,3 +257,20 @@ def test_tune_refuses_bad_settings(data):
         mlmap.tune(tr.logits, tr.labels, (val.logits, np.full(len(val), 5)))
     with pytest.raises(ValueError, match=r"^val\.logits: has 2 columns but there are 3 classes"):
         mlmap.tune(tr.logits, tr.labels, (val.logits[:, :2], val.labels))
+
+
+def test_float32_arrays_give_the_bytes_of_mlmap_fit_on_an_npy_directory(data, cli, tmp_path):
+    # The CLI reads a float32 logits.npy as the same f64 values the package reads.
+    train = data["train"]
+    d = tmp_path / "npy"
+    d.mkdir()
+    x32 = train.logits.astype(np.float32)
+    np.save(d / "logits.npy", x32)
+    np.save(d / "labels.npy", train.labels.astype(np.int32))
+    np.save(d / "objectness.npy", train.objectness.astype(np.float32))
+    (d / "classes.txt").write_text("\n".join(CLASSES) + "\n")
+    out = tmp_path / "npy.mlmap"
+    cli("fit", "--train", d, "--edges", "matlab", "--output", out)
+    got = mlmap.fit(x32, train.labels.astype(np.int32), train.objectness.astype(np.float32),
+                    classes=CLASSES, edges="matlab")
+    assert got.to_bytes() == out.read_bytes()
