@@ -79,6 +79,7 @@ impl Format for InferError {
             Self::Length => write!(f, "Length"),
             Self::Evidence => write!(f, "Evidence"),
             Self::NoBayesHead => write!(f, "NoBayesHead"),
+            Self::CodeRange { class } => write!(f, "CodeRange({})", class),
         }
     }
 }
