@@ -8,6 +8,7 @@ pub mod eval;
 pub mod export_c;
 pub mod fit;
 pub mod inspect;
+pub mod quantize;
 pub mod tune;
 
 use crate::args::{Cli, Command};
@@ -23,5 +24,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Demo(a) => demo::run(a),
         Command::ExportC(a) => export_c::run(a),
+        Command::Quantize(a) => quantize::run(a),
     }
 }
