@@ -618,3 +618,22 @@ mod random {
         }
     }
 }
+
+/// `tables/default_q8.mlmap` is the shipped table followed by its int8 section for scale
+/// 0.08 (what `mlmap quantize --scale 0.08` writes), and the section embedded at build
+/// time (`mlmap::embedded::quantized`) scores exactly as the one read from the file.
+#[test]
+fn shipped_quantized_file_and_embedded_section() {
+    let file = include_bytes!("../tables/default_q8.mlmap");
+    let mut want = SHIPPED_MLMAP.to_vec();
+    want.extend_from_slice(&shipped_section(8));
+    assert_eq!(&file[..], &want[..]);
+    use mlmap::embedded::quantized::{QUANTIZED, QUANTIZED_BITS, QUANTIZED_K, QUANTIZED_SECTION};
+    assert_eq!((QUANTIZED_K, QUANTIZED_BITS), (3, 8));
+    assert_eq!(&QUANTIZED_SECTION[..], &file[SHIPPED_MLMAP.len()..]);
+    let read = QTable::<3, i8>::from_bytes(file).unwrap();
+    assert_eq!(QUANTIZED, read);
+    for codes in [[0i8, 0, 0], [50, -20, 10], [127, -128, 3]] {
+        assert_eq!(QUANTIZED.bayes(&codes, 0.8), read.bayes(&codes, 0.8));
+    }
+}

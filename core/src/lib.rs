@@ -37,12 +37,15 @@ mod dyn_table;
 #[cfg(feature = "alloc")]
 pub mod __embed_source {
     //! Build-script support: see `embed.rs`.
-    pub use crate::embed_source::rust_source;
+    pub use crate::embed_source::{quantized_source, rust_source};
 }
 #[doc(hidden)]
 pub mod __embed {
     //! `const` constructors for build-script output; not part of the API.
-    pub use crate::embed::{axis, class_name, gaussian, histogram, table};
+    pub use crate::embed::{
+        axis, class_name, gaussian, histogram, part, part4, qclass, qlogit, qmeta, qtable, table,
+        QLOGIT_NONE,
+    };
 }
 mod embed;
 #[cfg(feature = "alloc")]

@@ -225,21 +225,21 @@ impl core::error::Error for QTableError {}
 
 /// One class's ML and MAP data, borrowed from the section.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct QClass<'a> {
+pub struct QClass<'a> {
     pub(crate) scale: f32,
     pub(crate) zero_point: i32,
     pub(crate) ml_start: i32,
     /// One index per code of the window (1 or 2 bytes each).
     pub(crate) ml_index: &'a [u8],
     /// B_ML masses, `f32` LE.
-    pub(crate) ml_masses: &'a [u8],
+    pub(crate) ml_masses: &'a [[u8; 4]],
     pub(crate) map_start: i32,
     /// One mass per code of the window, `f32` LE.
-    pub(crate) map_masses: &'a [u8],
+    pub(crate) map_masses: &'a [[u8; 4]],
 }
 
 impl QClass<'_> {
-    const EMPTY: QClass<'static> = QClass {
+    pub(crate) const EMPTY: QClass<'static> = QClass {
         scale: 0.0,
         zero_point: 0,
         ml_start: 0,
@@ -252,16 +252,16 @@ impl QClass<'_> {
 
 /// One logit's Bayes data, borrowed from the section.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct QLogit<'a> {
+pub struct QLogit<'a> {
     pub(crate) start: i32,
     /// One index per code of the window.
     pub(crate) index: &'a [u8],
     /// B_BAYES rows of C log-terms, `f32` LE.
-    pub(crate) terms: &'a [u8],
+    pub(crate) terms: &'a [[u8; 4]],
 }
 
 impl QLogit<'_> {
-    const EMPTY: QLogit<'static> = QLogit {
+    pub(crate) const EMPTY: QLogit<'static> = QLogit {
         start: 0,
         index: &[],
         terms: &[],
@@ -270,7 +270,7 @@ impl QLogit<'_> {
 
 /// The header fields of a section.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Meta<'a> {
+pub struct Meta<'a> {
     pub(crate) bits: u8,
     pub(crate) k: u16,
     pub(crate) bins_ml: u16,
@@ -281,7 +281,7 @@ pub(crate) struct Meta<'a> {
     pub(crate) lambda_map: f32,
     pub(crate) log_lambda: f32,
     /// C log priors, `f32` LE (empty without a Bayes head).
-    pub(crate) log_prior: &'a [u8],
+    pub(crate) log_prior: &'a [[u8; 4]],
     /// Length of the section, trailer included.
     pub(crate) len: usize,
 }
@@ -327,23 +327,25 @@ impl<'a> Reader<'a> {
     fn elements(&mut self, n: usize, size: usize) -> Result<&'a [u8], QTableError> {
         self.take(n.checked_mul(size).ok_or(QTableError::Malformed)?)
     }
+
+    /// `n` values of 4 bytes each.
+    fn values(&mut self, n: usize) -> Result<&'a [[u8; 4]], QTableError> {
+        Ok(self.elements(n, 4)?.as_chunks::<4>().0)
+    }
 }
 
-/// `f32` number `i` of little-endian bytes.
+/// `f32` number `i` of little-endian values.
 #[inline(always)]
-pub(crate) fn f32_at(bytes: &[u8], i: usize) -> Option<f32> {
-    let at = i.checked_mul(4)?;
-    let b = bytes.get(at..at.checked_add(4)?)?;
-    Some(f32::from_le_bytes(b.try_into().ok()?))
+pub(crate) fn f32_at(values: &[[u8; 4]], i: usize) -> Option<f32> {
+    values.get(i).map(|&b| f32::from_le_bytes(b))
 }
 
 /// Index number `i` of a code-to-bin map with entries of one (`wide` false) or two bytes.
 #[inline(always)]
 fn index_at(bytes: &[u8], wide: bool, i: usize) -> Option<usize> {
     if wide {
-        let at = i.checked_mul(2)?;
-        let b = bytes.get(at..at.checked_add(2)?)?;
-        Some(usize::from(u16::from_le_bytes(b.try_into().ok()?)))
+        let b = bytes.as_chunks::<2>().0.get(i)?;
+        Some(usize::from(u16::from_le_bytes(*b)))
     } else {
         bytes.get(i).map(|&b| usize::from(b))
     }
@@ -359,10 +361,11 @@ pub(crate) const fn index_width(bins: u16) -> usize {
     }
 }
 
-/// The window position of code `q` in a window starting at `start`, if `q >= start`.
+/// The window position of code `q` in a window starting at `start`: `q - start`, or,
+/// for `q < start`, a number above 2^31 that no window (at most 65,536 codes) reaches.
 #[inline(always)]
-fn offset(q: i32, start: i32) -> Option<usize> {
-    usize::try_from(q.wrapping_sub(start)).ok()
+fn offset(q: i32, start: i32) -> usize {
+    q.wrapping_sub(start) as u32 as usize
 }
 
 /// Locates the quantized section in `bytes`: the section alone, or a table file with the
@@ -484,10 +487,9 @@ pub(crate) fn parse<'a>(
             Err(invalid(QField::Index, c))
         }
     };
-    let check_masses = |masses: &[u8], c: usize| {
-        let n = masses.len() / 4;
+    let check_masses = |masses: &[[u8; 4]], c: usize| {
         let ok = |m: f32| m > 0.0 && m <= MAX_MASS;
-        if (0..n).all(|i| f32_at(masses, i).is_some_and(ok)) {
+        if masses.iter().all(|&m| ok(f32::from_le_bytes(m))) {
             Ok(())
         } else {
             Err(invalid(QField::Mass, c))
@@ -506,10 +508,10 @@ pub(crate) fn parse<'a>(
         let (ml_start, n) = window(&mut r, c)?;
         let ml_index = r.elements(n, index_width(bins_ml))?;
         check_index(ml_index, wide_ml, bins_ml, c)?;
-        let ml_masses = r.elements(usize::from(bins_ml), 4)?;
+        let ml_masses = r.values(usize::from(bins_ml))?;
         check_masses(ml_masses, c)?;
         let (map_start, n) = window(&mut r, c)?;
-        let map_masses = r.elements(n, 4)?;
+        let map_masses = r.values(n)?;
         check_masses(map_masses, c)?;
         class(
             c,
@@ -524,7 +526,7 @@ pub(crate) fn parse<'a>(
             },
         );
     }
-    let mut log_prior: &[u8] = &[];
+    let mut log_prior: &[[u8; 4]] = &[];
     if has_bayes {
         let wide = index_width(bins_bayes) == 2;
         let row = usize::from(bins_bayes) * usize::from(categories);
@@ -532,8 +534,8 @@ pub(crate) fn parse<'a>(
             let (start, n) = window(&mut r, j)?;
             let index = r.elements(n, index_width(bins_bayes))?;
             check_index(index, wide, bins_bayes, j)?;
-            let terms = r.elements(row, 4)?;
-            if !(0..row).all(|i| f32_at(terms, i).is_some_and(small_log)) {
+            let terms = r.values(row)?;
+            if !terms.iter().all(|&t| small_log(f32::from_le_bytes(t))) {
                 return Err(invalid(QField::LogTerm, j));
             }
             logit(
@@ -545,9 +547,9 @@ pub(crate) fn parse<'a>(
                 },
             );
         }
-        log_prior = r.elements(usize::from(categories), 4)?;
-        for c in 0..usize::from(categories) {
-            if !f32_at(log_prior, c).is_some_and(small_log) {
+        log_prior = r.values(usize::from(categories))?;
+        for (c, &v) in log_prior.iter().enumerate() {
+            if !small_log(f32::from_le_bytes(v)) {
                 return Err(invalid(QField::LogTerm, c));
             }
         }
@@ -589,8 +591,7 @@ impl<'a> QView<'_, 'a> {
     #[inline(always)]
     fn ml_mass(&self, c: &QClass<'a>, q: i32) -> f32 {
         let wide = self.meta.bins_ml > 256;
-        offset(q, c.ml_start)
-            .and_then(|i| index_at(c.ml_index, wide, i))
+        index_at(c.ml_index, wide, offset(q, c.ml_start))
             .and_then(|b| f32_at(c.ml_masses, b))
             .unwrap_or(self.meta.lambda_ml)
     }
@@ -598,9 +599,7 @@ impl<'a> QView<'_, 'a> {
     /// The MAP mass of class `c`'s code `q` (`lambda_MAP` outside its window).
     #[inline(always)]
     fn map_mass(&self, c: &QClass<'a>, q: i32) -> f32 {
-        offset(q, c.map_start)
-            .and_then(|i| f32_at(c.map_masses, i))
-            .unwrap_or(self.meta.lambda_map)
+        f32_at(c.map_masses, offset(q, c.map_start)).unwrap_or(self.meta.lambda_map)
     }
 
     /// The masses of one head into `out`, then the layer's normalisation. `codes` holds
@@ -650,22 +649,19 @@ impl<'a> QView<'_, 'a> {
         if out.len() != self.classes.len() || scratch.len() != cats {
             return Err(InferError::Length);
         }
-        for (c, l) in scratch.iter_mut().enumerate() {
-            *l = f32_at(self.meta.log_prior, c).unwrap_or(0.0);
+        for (l, &p) in scratch.iter_mut().zip(self.meta.log_prior) {
+            *l = f32::from_le_bytes(p);
         }
         let wide = self.meta.bins_bayes > 256;
-        let row_len = cats * 4;
         for (lg, q) in self.logits.iter().zip(codes) {
-            let row = offset(q, lg.start)
-                .and_then(|i| index_at(lg.index, wide, i))
-                .and_then(|b| {
-                    let at = b.checked_mul(row_len)?;
-                    lg.terms.get(at..at.checked_add(row_len)?)
-                });
+            let row = index_at(lg.index, wide, offset(q, lg.start)).and_then(|b| {
+                let at = b.checked_mul(cats)?;
+                lg.terms.get(at..at.checked_add(cats)?)
+            });
             match row {
                 Some(row) => {
-                    for (l, t) in scratch.iter_mut().zip(row.chunks_exact(4)) {
-                        *l += t.try_into().map_or(0.0, f32::from_le_bytes);
+                    for (l, &t) in scratch.iter_mut().zip(row) {
+                        *l += f32::from_le_bytes(t);
                     }
                 }
                 None => {
@@ -682,7 +678,14 @@ impl<'a> QView<'_, 'a> {
 
 /// A validated quantized section for `K` classes and codes of type `Q` (`i8` or
 /// `i16`), borrowed from its bytes: the ML, MAP and, if the section has it, Bayes heads
-/// on integer logits (see the [module docs](self) and docs/FORMAT.md).
+/// on integer logits (docs/FORMAT.md, "The quantized section").
+///
+/// Built once by [`quantize_into`](crate::quantize_into) from a table and the detector's
+/// quantization: per class and representable code, the ML mass and the MAP mass (and per
+/// logit the Bayes head's bin) of the dequantized logit, computed by the `f32` layer's own
+/// functions. Only the codes whose mass differs from lambda are stored (the ML head as a
+/// one-byte bin index per code, the MAP head as `f32` masses); inference is K lookups and
+/// the layer's normalisation, with no `exp` for ML and MAP.
 ///
 /// The scores equal, bit for bit, the `f32` table's on the dequantized logits
 /// `x_c = ((q_c - zero_point_c) as f32) * scale_c`: [`QTable::ml`] those of
@@ -712,10 +715,10 @@ impl<'a> QView<'_, 'a> {
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct QTable<'a, const K: usize, Q: Code = i8> {
-    meta: Meta<'a>,
-    classes: [QClass<'a>; K],
-    logits: [QLogit<'a>; K],
-    code: core::marker::PhantomData<Q>,
+    pub(crate) meta: Meta<'a>,
+    pub(crate) classes: [QClass<'a>; K],
+    pub(crate) logits: [QLogit<'a>; K],
+    pub(crate) code: core::marker::PhantomData<Q>,
 }
 
 impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {

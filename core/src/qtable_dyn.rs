@@ -36,9 +36,9 @@ use crate::view::BayesBackend;
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct DynQTable<'a> {
-    meta: crate::qtable::Meta<'a>,
-    classes: Vec<QClass<'a>>,
-    logits: Vec<QLogit<'a>>,
+    pub(crate) meta: crate::qtable::Meta<'a>,
+    pub(crate) classes: Vec<QClass<'a>>,
+    pub(crate) logits: Vec<QLogit<'a>>,
 }
 
 impl<'a> DynQTable<'a> {
@@ -128,7 +128,7 @@ impl<'a> DynQTable<'a> {
             .map(|l| (l.start, l.index.len() / wide(self.meta.bins_bayes)));
         Some([
             Some((q.ml_start, q.ml_index.len() / wide(self.meta.bins_ml))),
-            Some((q.map_start, q.map_masses.len() / 4)),
+            Some((q.map_start, q.map_masses.len())),
             bayes,
         ])
     }
