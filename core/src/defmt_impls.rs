@@ -259,10 +259,7 @@ impl Format for crate::QParams<'_> {
         write!(
             f,
             "QParams(int{}, scales {=[?]}, zero points {=[?]}, Bayes {})",
-            self.bits,
-            self.scales,
-            self.zero_points,
-            self.bayes
+            self.bits, self.scales, self.zero_points, self.bayes
         )
     }
 }
