@@ -27,6 +27,7 @@ use cortex_m_rt::entry;
 
 /// The table shipped with the crate (K = 3, 22 ML bins, 17 MAP bins), as firmware keeps
 /// it in a calibration flash sector.
+#[cfg(not(feature = "quantized"))]
 static TABLE_BYTES: &[u8] = include_bytes!("../../tables/default.mlmap");
 
 /// The shipped table with its int8 quantized section (scale 0.08).

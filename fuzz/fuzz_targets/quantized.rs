@@ -163,8 +163,9 @@ fn build(mut data: &[u8]) {
         zero_points: &zps,
         bayes: true,
     };
-    let mut buf = vec![0u8; 1 << 19];
-    let bytes = match quantize_into(&t.view(), &p, &mut buf) {
+    let len = mlmap::quantized_len(&t.view(), &p);
+    let mut buf = vec![0u8; *len.as_ref().unwrap_or(&0)];
+    let bytes = match len.and_then(|_| quantize_into(&t.view(), &p, &mut buf)) {
         Ok(b) => b,
         Err(e) => {
             // Only bad parameters are refused.
