@@ -645,8 +645,10 @@ impl<'a> QView<'_, 'a> {
         if !(0.0..=1.0).contains(&objectness) {
             return Err(InferError::Objectness);
         }
-        let cats = usize::from(self.meta.categories);
-        if out.len() != self.classes.len() || scratch.len() != cats {
+        // The length of `scratch` (not the header's field) sizes the rows, so that a
+        // caller with a compile-time C gets loops of known length.
+        let cats = scratch.len();
+        if out.len() != self.classes.len() || cats != usize::from(self.meta.categories) {
             return Err(InferError::Length);
         }
         for (l, &p) in scratch.iter_mut().zip(self.meta.log_prior) {
@@ -874,18 +876,19 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
         objectness: f32,
     ) -> Result<Scores<K>, InferError> {
         let mut out = [0.0; K];
-        // C <= K + 1 <= 2K log-scores.
+        // C is K or K + 1 <= 2K log-scores; each case with a length known at compile
+        // time, so that its loops are unrolled as in `Table::bayes`.
         let mut scratch = [[0.0f32; 2]; K];
-        let scratch = scratch
-            .as_flattened_mut()
-            .get_mut(..usize::from(self.meta.categories))
-            .ok_or(InferError::Length)?;
-        self.view().bayes_into::<M>(
-            codes.iter().map(|q| q.value()),
-            objectness,
-            &mut out,
-            scratch,
-        )?;
+        let scratch = scratch.as_flattened_mut();
+        let codes = codes.iter().map(|q| q.value());
+        let view = self.view();
+        if usize::from(self.meta.categories) == K {
+            let scratch = scratch.get_mut(..K).ok_or(InferError::Length)?;
+            view.bayes_into::<M>(codes, objectness, &mut out, scratch)?;
+        } else {
+            let scratch = scratch.get_mut(..K + 1).ok_or(InferError::Length)?;
+            view.bayes_into::<M>(codes, objectness, &mut out, scratch)?;
+        }
         Ok(Scores(out))
     }
 
