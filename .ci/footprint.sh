@@ -129,6 +129,12 @@ printf '.text of QTable decode + ML + MAP: %d B; goal <= 4096 B: %s\n' "$qcode" 
 printf '.text of QTable decode + ML + MAP + Bayes: %d B\n' "$qbayes"
 printf 'quantized section (ML, MAP, Bayes): %d B\n' "$qsec"
 
+section "the MAP head's exp backends (.text of decode + ML + MAP)"
+for backend in map-fastmath map-micromath; do
+    elf=$(build "$backend")
+    printf '%s: %d B (libm: %d B)\n' "$backend" "$(($(section_size "$elf" .text) - text[base]))" "$code"
+done
+
 section "table file"
 bytes=$(wc -c <../tables/default.mlmap)
 printf 'tables/default.mlmap (K = 3, 22 ML bins, 17 MAP bins): %d B encoded; goal <= 800 B: %s\n' \

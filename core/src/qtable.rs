@@ -892,6 +892,30 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
         Ok(Scores(out))
     }
 
+    /// The dequantized logits of `codes` ([`dequantize`] with each class's scale and zero
+    /// point): what the scores are exact for, and what the tie-safe decision compares
+    /// (`scores.decide(&q.logits(&codes))`, DESIGN §1.7), since classes may have
+    /// different scales.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// # use mlmap_core as mlmap;
+    /// let q = mlmap::QTable::<3, i8>::from_bytes(include_bytes!("../../tables/default_q8.mlmap"))?;
+    /// assert_eq!(q.logits(&[50, -25, 0]), [4.0, -2.0, 0.0]);
+    /// let never_seen = q.ml(&[-128; 3], 1.0)?; // OS / K each: ties everywhere
+    /// assert_eq!(never_seen.decide(&q.logits(&[-128, -100, -128])), 1);
+    /// # Ok::<(), Box<dyn core::error::Error>>(())
+    /// ```
+    #[inline]
+    pub fn logits(&self, codes: &[Q; K]) -> [f32; K] {
+        let mut x = [0.0; K];
+        for ((x, q), c) in x.iter_mut().zip(codes).zip(&self.classes) {
+            *x = dequantize(q.value(), c.scale, c.zero_point);
+        }
+        x
+    }
+
     /// Whether the section has the Bayes head.
     #[inline]
     pub fn has_bayes(&self) -> bool {

@@ -13,7 +13,9 @@
 //! * feature `quantized`: [`QTable::from_bytes`](mlmap::QTable::from_bytes) of the int8
 //!   section of `tables/default_q8.mlmap` (CRC and every check), then
 //!   [`QTable::ml`](mlmap::QTable::ml) and [`QTable::map`](mlmap::QTable::map) on one
-//!   detection; with `quantized-bayes` also [`QTable::bayes`](mlmap::QTable::bayes).
+//!   detection; with `quantized-bayes` also [`QTable::bayes`](mlmap::QTable::bayes);
+//! * features `map-fastmath`, `map-micromath`: the default variant with the MAP head's
+//!   `exp` from `FastMath` or `Micromath` instead of libm.
 //!
 //! The differences of the images are the footprints of decoding and of inference. The
 //! binary is never run; it only has to link. Decoding and scoring are functions of
@@ -56,7 +58,12 @@ fn decode(bytes: &[u8]) -> Result<Calibration, mlmap::DecodeError> {
 fn score(table: &Calibration) {
     let (logits, objectness) = black_box(([4.2f32, -1.5, 0.3], 0.9f32));
     black_box(table.ml(&logits, objectness).ok());
+    #[cfg(not(any(feature = "map-fastmath", feature = "map-micromath")))]
     black_box(table.map(&logits, objectness).ok());
+    #[cfg(feature = "map-fastmath")]
+    black_box(table.map_with::<mlmap::FastMath>(&logits, objectness).ok());
+    #[cfg(feature = "map-micromath")]
+    black_box(table.map_with::<mlmap::Micromath>(&logits, objectness).ok());
 }
 
 #[cfg(feature = "decode-only")]
