@@ -5,6 +5,9 @@
 //! normalisers, Bayes log priors) come from `mlmap-core`, the crate the layer itself is
 //! built from, so the build accepts exactly the tables `Table::from_bytes` accepts and
 //! computes the constants with the same `f32` code as the device.
+//!
+//! Likewise the quantized section of the file named by `MLMAP_QUANTIZED` (default
+//! `tables/default_q8.mlmap`) becomes `$OUT_DIR/embedded_quantized.rs`.
 
 use std::path::PathBuf;
 use std::{env, fmt, fs};
@@ -60,6 +63,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .to_string();
     let code = mlmap_core::__embed_source::rust_source(&table, &shown, &bytes, "crate");
     let out = PathBuf::from(env::var("OUT_DIR")?).join("embedded_table.rs");
+    fs::write(out, code)?;
+    embed_quantized(&manifest)
+}
+
+/// The quantized section of the file named by `MLMAP_QUANTIZED` (default
+/// `tables/default_q8.mlmap`, the shipped table quantized to int8 with scale 0.08)
+/// into `$OUT_DIR/embedded_quantized.rs`, validated by the section reader of the layer.
+fn embed_quantized(manifest: &std::path::Path) -> Result<(), Box<dyn std::error::Error>> {
+    println!("cargo::rerun-if-env-changed=MLMAP_QUANTIZED");
+    let path = match env::var_os("MLMAP_QUANTIZED") {
+        Some(p) => manifest.join(PathBuf::from(p)),
+        None => manifest.join("tables").join("default_q8.mlmap"),
+    };
+    println!("cargo::rerun-if-changed={}", path.display());
+    let fail = |msg: String| -> Box<dyn std::error::Error> {
+        Box::new(BuildError(format!(
+            "mlmap: cannot embed the quantized section `{}` (MLMAP_QUANTIZED): {msg}",
+            path.display()
+        )))
+    };
+    let bytes = fs::read(&path).map_err(|e| fail(e.to_string()))?;
+    let shown = path
+        .strip_prefix(manifest)
+        .unwrap_or(&path)
+        .display()
+        .to_string();
+    let code = mlmap_core::__embed_source::quantized_source(&bytes, &shown, "crate")
+        .map_err(|e| fail(e.to_string()))?;
+    let out = PathBuf::from(env::var("OUT_DIR")?).join("embedded_quantized.rs");
     fs::write(out, code)?;
     Ok(())
 }

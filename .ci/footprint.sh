@@ -119,6 +119,22 @@ echo "largest symbols of the full image (bytes):"
     printf '  %6d %s %s\n' $((16#$size)) "$kind" "${name%%::h[0-9a-f]*}"
 done
 
+section "the quantized table (int8, tables/default_q8.mlmap's section)"
+quant=$(build quantized)
+quant_bayes=$(build quantized-bayes)
+qcode=$(($(section_size "$quant" .text) - text[base]))
+qbayes=$(($(section_size "$quant_bayes" .text) - text[base]))
+qsec=$(python3 -c 'import struct,sys; b=open(sys.argv[1],"rb").read(); print(struct.unpack("<I", b[-8:-4])[0])' ../tables/default_q8.mlmap 2>/dev/null || echo 0)
+printf '.text of QTable decode + ML + MAP: %d B; goal <= 4096 B: %s\n' "$qcode" "$(verdict "$qcode" 4096)"
+printf '.text of QTable decode + ML + MAP + Bayes: %d B\n' "$qbayes"
+printf 'quantized section (ML, MAP, Bayes): %d B\n' "$qsec"
+
+section "the MAP head's exp backends (.text of decode + ML + MAP)"
+for backend in map-fastmath map-micromath; do
+    elf=$(build "$backend")
+    printf '%s: %d B (libm: %d B)\n' "$backend" "$(($(section_size "$elf" .text) - text[base]))" "$code"
+done
+
 section "table file"
 bytes=$(wc -c <../tables/default.mlmap)
 printf 'tables/default.mlmap (K = 3, 22 ML bins, 17 MAP bins): %d B encoded; goal <= 800 B: %s\n' \

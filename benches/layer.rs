@@ -1,7 +1,8 @@
 //! The layers side by side, K = 3, on the shipped table (22 ML bins, 17 MAP bins):
 //! the Sigmoid and Softmax layers mlmap replaces, ML, MAP (libm), MAP (`FastMath`, the
 //! crate's own `exp`) and MAP (`Micromath`, feature `micromath`), per detection and per
-//! batch of 4096 detections, and decoding the table.
+//! batch of 4096 detections, and decoding the table; and the quantized table (`QTable`)
+//! on int8 codes of the same rows (`round(x / 0.08)`): ML, MAP and Bayes.
 //!
 //! ```text
 //! cargo bench --bench layer --features micromath
@@ -25,13 +26,39 @@ use std::time::{Duration, Instant};
 
 use criterion::{criterion_group, Criterion, Throughput};
 use mlmap::baseline::{sigmoid, softmax};
-use mlmap::{Libm, Table};
+use mlmap::{quantize_into, Libm, QParams, QTable, Table};
 
 type Shipped = Table<3, 22, 17, 22, 4>;
 
 const TABLE: &[u8] = include_bytes!("../tables/default.mlmap");
 const TEST_CSV: &str = include_str!("../examples/data/test.csv");
 const BATCH: usize = 4096;
+
+/// The scale of the int8 codes of the quantized layers.
+const SCALE: f32 = 0.08;
+
+/// The shipped table's int8 quantized section (ML, MAP and Bayes heads).
+fn section(table: &Shipped) -> Vec<u8> {
+    let params = QParams {
+        bits: 8,
+        scales: &[SCALE; 3],
+        zero_points: &[0; 3],
+        bayes: true,
+    };
+    let mut buf = vec![0u8; 8192];
+    let n = quantize_into(&table.view(), &params, &mut buf)
+        .expect("the section fits")
+        .len();
+    buf.truncate(n);
+    buf
+}
+
+/// The logits as int8 codes.
+fn codes(xs: &[[f32; 3]]) -> Vec<[i8; 3]> {
+    xs.iter()
+        .map(|x| x.map(|v| (v / SCALE).round().clamp(-128.0, 127.0) as i8))
+        .collect()
+}
 
 /// The logits (in the table's class order) and objectness of the test rows.
 fn detections(table: &Shipped) -> (Vec<[f32; 3]>, Vec<f32>) {
@@ -83,6 +110,25 @@ fn layers(c: &mut Criterion) {
     #[cfg(feature = "micromath")]
     per_detection!("map_micromath", |x, o| table
         .map_with::<mlmap::Micromath>(x, o));
+    let bytes = section(&table);
+    let q = QTable::<3, i8>::from_bytes(&bytes).expect("the section reads back");
+    let qs = codes(&xs);
+    macro_rules! per_code {
+        ($name:literal, |$c:ident, $o:ident| $call:expr) => {
+            let mut i = 0usize;
+            g.bench_function($name, |b| {
+                b.iter(|| {
+                    let r = i % BATCH;
+                    i = i.wrapping_add(1);
+                    let ($c, $o) = (black_box(&qs[r]), black_box(os[r]));
+                    black_box($call)
+                })
+            });
+        };
+    }
+    per_code!("q8_ml", |c, o| q.ml(c, o));
+    per_code!("q8_map", |c, o| q.map(c, o));
+    per_code!("q8_bayes", |c, o| q.bayes(c, o));
     g.finish();
 
     // A batch of 4096 detections per iteration. The baselines have no batch API: they
@@ -132,8 +178,27 @@ fn layers(c: &mut Criterion) {
     g.finish();
 }
 
+/// What the interleaved layers run on: the table, its quantized section and the codes.
+struct Ctx<'a> {
+    table: Shipped,
+    q: QTable<'a, 3, i8>,
+    codes: Vec<[i8; 3]>,
+}
+
 /// One layer over all `xs`, through the batch API where the layer has one.
-type Run = fn(&Shipped, &[[f32; 3]], &[f32], &mut [[f32; 3]]);
+type Run = fn(&Ctx<'_>, &[[f32; 3]], &[f32], &mut [[f32; 3]]);
+
+/// The quantized layers' batch: a plain loop over the codes.
+fn loop_codes(
+    codes: &[[i8; 3]],
+    os: &[f32],
+    out: &mut [[f32; 3]],
+    f: impl Fn(&[i8; 3], f32) -> Result<mlmap::Scores<3>, mlmap::InferError>,
+) {
+    for ((c, &o), s) in codes.iter().zip(os).zip(out.iter_mut()) {
+        *s = f(c, o).map(|s| s.0).unwrap_or([f32::NAN; 3]);
+    }
+}
 
 /// The baselines' batch: a plain loop.
 fn loop_over(
@@ -155,17 +220,30 @@ const INTERLEAVED: &[(&str, Option<f64>, Run)] = &[
         loop_over(xs, os, out, softmax::<Libm, 3>)
     }),
     ("ml", Some(0.5), |t, xs, os, out| {
-        black_box(t.ml_batch(xs, Some(os), out)).ok();
+        black_box(t.table.ml_batch(xs, Some(os), out)).ok();
     }),
     ("map", Some(1.25), |t, xs, os, out| {
-        black_box(t.map_batch(xs, Some(os), out)).ok();
+        black_box(t.table.map_batch(xs, Some(os), out)).ok();
     }),
     ("map_fast", Some(0.75), |t, xs, os, out| {
-        black_box(t.map_batch_with::<mlmap::FastMath>(xs, Some(os), out)).ok();
+        black_box(t.table.map_batch_with::<mlmap::FastMath>(xs, Some(os), out)).ok();
     }),
     #[cfg(feature = "micromath")]
     ("map_micromath", None, |t, xs, os, out| {
-        black_box(t.map_batch_with::<mlmap::Micromath>(xs, Some(os), out)).ok();
+        black_box(
+            t.table
+                .map_batch_with::<mlmap::Micromath>(xs, Some(os), out),
+        )
+        .ok();
+    }),
+    ("q8_ml", Some(0.3), |t, _, os, out| {
+        loop_codes(black_box(&t.codes), os, out, |c, o| t.q.ml(c, o))
+    }),
+    ("q8_map", Some(0.35), |t, _, os, out| {
+        loop_codes(black_box(&t.codes), os, out, |c, o| t.q.map(c, o))
+    }),
+    ("q8_bayes", None, |t, _, os, out| {
+        loop_codes(black_box(&t.codes), os, out, |c, o| t.q.bayes(c, o))
     }),
 ];
 
@@ -173,12 +251,18 @@ const INTERLEAVED: &[(&str, Option<f64>, Run)] = &[
 fn interleaved_ratios(rounds: usize) {
     let table = Shipped::from_bytes(TABLE).expect("the shipped table decodes");
     let (xs, os) = detections(&table);
+    let bytes = section(&table);
+    let ctx = Ctx {
+        q: QTable::from_bytes(&bytes).expect("the section reads back"),
+        codes: codes(&xs),
+        table,
+    };
     let mut out = vec![[0.0f32; 3]; BATCH];
     let mut best = vec![f64::INFINITY; INTERLEAVED.len()];
     for _ in 0..rounds {
         for ((_, _, run), best) in INTERLEAVED.iter().zip(best.iter_mut()) {
             let start = Instant::now();
-            run(&table, black_box(&xs), black_box(&os), black_box(&mut out));
+            run(&ctx, black_box(&xs), black_box(&os), black_box(&mut out));
             let ns = start.elapsed().as_secs_f64() * 1e9 / BATCH as f64;
             *best = best.min(ns);
         }

@@ -9,7 +9,9 @@
 //! Kinds: `sigmoid`, `softmax`, `ml`, `map`, `map_fast` (MAP with the `FastMath`
 //! backend), `map_micromath` (MAP with `Micromath`), `bayes` and `bayes_fast` (the Bayes head with
 //! `Libm` and `FastMath`), `sigmoid_fast` (the Sigmoid layer
-//! with `FastMath`), `decode`, and `noop` (a layer that only copies the logits: the cost
+//! with `FastMath`), `q8_ml`, `q8_map`, `q8_bayes` (the quantized table, int8 codes
+//! `round(x / 0.08)` of the same rows), `q8_noop` (the loop around the quantized
+//! kinds), `q8_decode` (`QTable::from_bytes` of the section), `decode`, and `noop` (a layer that only copies the logits: the cost
 //! of the loop around the layer). The detections are
 //! the first 4096 rows of `examples/data/test.csv`, cycled in file order; use an N that
 //! is a multiple of 4096 so N and 2N see the same mix of rows.
@@ -18,7 +20,7 @@ use std::hint::black_box;
 use std::process::ExitCode;
 
 use mlmap::baseline::{sigmoid, softmax};
-use mlmap::{FastMath, InferError, Libm, Micromath, Scores, Table};
+use mlmap::{quantize_into, FastMath, InferError, Libm, Micromath, QParams, QTable, Scores, Table};
 
 type Shipped = Table<3, 22, 17, 22, 4>;
 
@@ -30,12 +32,15 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
         eprintln!(
-            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|decode N"
+            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_decode N"
         );
         return ExitCode::from(2);
     };
     let table = Shipped::from_bytes(TABLE).expect("the shipped table decodes");
     let (xs, os) = detections(&table);
+    if let Some(head) = kind.strip_prefix("q8_") {
+        return quantized(&table, head, &xs, &os, n);
+    }
     let layer: fn(&Shipped, &[f32; 3], f32) -> Result<Scores<3>, InferError> = match kind.as_str() {
         "noop" => |_, x, _| Ok(Scores(*x)),
         "sigmoid" => |_, x, o| sigmoid::<Libm, 3>(x, o),
@@ -67,6 +72,53 @@ fn main() -> ExitCode {
         checksum += f64::from(black_box(s).map(|s| s.0[0]).unwrap_or(0.0));
     }
     println!("{kind} x {n}: checksum {checksum}");
+    ExitCode::SUCCESS
+}
+
+/// The scale of the int8 codes of the quantized kinds (logits -10.24 to 10.16).
+const SCALE: f32 = 0.08;
+
+/// The quantized kinds: the shipped table's int8 section, the same rows as codes.
+fn quantized(table: &Shipped, head: &str, xs: &[[f32; 3]], os: &[f32], n: usize) -> ExitCode {
+    let params = QParams {
+        bits: 8,
+        scales: &[SCALE; 3],
+        zero_points: &[0; 3],
+        bayes: true,
+    };
+    let mut buf = vec![0u8; 8192];
+    let bytes = quantize_into(&table.view(), &params, &mut buf).expect("the section fits");
+    let q = QTable::<3, i8>::from_bytes(bytes).expect("the section reads back");
+    let codes: Vec<[i8; 3]> = xs
+        .iter()
+        .map(|x| x.map(|v| (v / SCALE).round().clamp(-128.0, 127.0) as i8))
+        .collect();
+    type Layer = fn(&QTable<'_, 3, i8>, &[i8; 3], f32) -> Result<Scores<3>, InferError>;
+    let layer: Layer = match head {
+        "noop" => |_, c, _| Ok(Scores(c.map(f32::from))),
+        "ml" => |q, c, o| q.ml(c, o),
+        "map" => |q, c, o| q.map(c, o),
+        "bayes" => |q, c, o| q.bayes(c, o),
+        "decode" => {
+            let mut ok = 0usize;
+            for _ in 0..n {
+                ok += usize::from(QTable::<3, i8>::from_bytes(black_box(bytes)).is_ok());
+            }
+            println!("q8_decode x {n}: {ok} decoded ({} bytes)", bytes.len());
+            return ExitCode::SUCCESS;
+        }
+        other => {
+            eprintln!("unknown kind q8_{other}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut checksum = 0.0f64;
+    for i in 0..n {
+        let r = i % ROWS;
+        let s = layer(black_box(&q), black_box(&codes[r]), black_box(os[r]));
+        checksum += f64::from(black_box(s).map(|s| s.0[0]).unwrap_or(0.0));
+    }
+    println!("q8_{head} x {n}: checksum {checksum}");
     ExitCode::SUCCESS
 }
 

@@ -7,6 +7,9 @@ decode:    the shipped table, truncations of it, and small tables of the other s
            target decodes (written with the independent encoder in tools/mlmap_ref.py).
 roundtrip: the shipped table's statistics and a small table, in the `arbitrary` layout
            of the target's `Input`.
+quantized: mode 0 (a section): the int8 section of tables/default_q8.mlmap, the whole
+           file, and the section truncated; mode 1 (build one): int8 and int16
+           quantizations of the shipped table with a few codes.
 csv:       the example of DESIGN §2, the head of examples/data/test.csv, malformed files.
 infer:     detections on the shipped table (rows of examples/data/test.csv, NaN, ±inf,
            subnormals, bin edges, objectness at and beyond its bounds) and on a small
@@ -257,6 +260,19 @@ def main():
     for xs in ((1.0, -1.0), (-0.5, 0.25), (50.0, -50.0), (3.0, 3.0)):
         det += b"".join(logit_bits(x) for x in xs) + os_bits(0.5)
     write("infer", "small_table.bin", u8(2) + arb_table(small, 0.0055, 0.00012) + det)
+
+    # quantized
+    with open(os.path.join(ROOT, "tables", "default_q8.mlmap"), "rb") as f:
+        q8 = f.read()
+    n = struct.unpack("<I", q8[-8:-4])[0]
+    write("quantized", "section_q8.bin", u8(0) + q8[-n:])
+    write("quantized", "file_q8.bin", u8(0) + q8)
+    write("quantized", "section_q8_head.bin", u8(0) + q8[-n:][:200] + q8[-8:])
+    codes = b"".join(struct.pack("<hhhB", a, b, c, o)
+                     for a, b, c, o in ((50, -20, 10, 255), (-128, 127, 0, 128), (300, -300, 5, 7)))
+    for name, width, scale, zp in (("build_q8.bin", 0, 0.08, 0), ("build_q16.bin", 1, 0.001, -300)):
+        params = u8(width) + struct.pack("<fff", scale, scale * 0.7, scale * 1.3) + struct.pack("<hhh", zp, 3, -7)
+        write("quantized", name, u8(1) + params + codes)
 
     # csv (the target is built once the reader lands; see fuzz_targets/csv.rs)
     with open(os.path.join(ROOT, "examples", "data", "test.csv"), "rb") as f:

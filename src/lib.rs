@@ -83,6 +83,12 @@ pub mod invariants;
 #[doc(hidden)]
 pub use mlmap_core::__embed;
 
+// The quantized table (int8 / int16 logits).
+pub use mlmap_core::{
+    code_range, dequantize, quantize_into, quantized_len, Code, QField, QParams, QTable,
+    QTableError, QuantizeError, MAX_LOG_TERM, MAX_MASS, QUANTIZED_MAGIC, QUANTIZED_VERSION,
+};
+
 pub use mlmap_core::{
     fast_math_max_score_error, FastMath, FAST_MATH_MAX_REL_ERROR, FAST_MATH_MAX_SCORE_ERROR,
 };

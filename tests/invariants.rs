@@ -876,7 +876,7 @@ raised_bin_properties! {
 /// the normal range (absolute rounding `2^-149` on a total of at least 1) and two
 /// subnormal steps for subnormal scores.
 #[cfg(feature = "std")]
-mod bayes {
+pub(crate) mod bayes {
     use mlmap::host::{BayesSpec, DynTable};
     use mlmap::invariants::{
         bayes_mismatch, bayes_reference, bayes_score_tolerance, bayes_sum, check_dyn_table,
@@ -888,7 +888,7 @@ mod bayes {
 
     /// A Bayes head before validation, as counts.
     #[derive(Debug, Clone)]
-    struct BayesParams {
+    pub(crate) struct BayesParams {
         lambda: f32,
         bins: usize,
         ranges: Vec<(f32, f32)>,
@@ -959,7 +959,7 @@ mod bayes {
 
     /// A random run-time shaped table of `k` classes (ML and MAP heads of 3 and 2 bins)
     /// with a random Bayes head of `bins` bins.
-    fn dyn_table(
+    pub(crate) fn dyn_table(
         k: usize,
         bins: usize,
         background: bool,

@@ -15,6 +15,9 @@ mod format;
 /// checked by the `mlmap::invariants` checkers that the fuzz targets share.
 mod invariants;
 
+/// The quantized table: bit-for-bit agreement with the f32 heads, size, malformed sections.
+mod quantized;
+
 /// Reading CSV files and NPY directories: valid inputs and every malformed case (DESIGN §2).
 #[cfg(feature = "std")]
 mod host_data;

@@ -10,8 +10,9 @@
 # of the loop around the layer (kind `noop`: fetch a row, call through a function pointer,
 # fold the result into a checksum). Kinds: the Sigmoid layer with libm and with FastMath,
 # Softmax, ML, MAP with libm (`map`), FastMath (`map_fast`) and Micromath
-# (`map_micromath`), the Bayes head with libm (`bayes`) and FastMath (`bayes_fast`), and
-# decoding.
+# (`map_micromath`), the Bayes head with libm (`bayes`) and FastMath (`bayes_fast`),
+# decoding, and the quantized table on int8 codes of the same rows (`q8_ml`, `q8_map`,
+# `q8_bayes`; `q8_noop` is their loop; `q8_decode` reads the section).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -31,15 +32,17 @@ count() {
 
 declare -A per
 printf '%-14s %14s %14s %12s\n' kind "Ir(N=$n)" "Ir(2N)" "Ir/detection"
-for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast decode; do
+for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast decode q8_noop q8_ml q8_map q8_bayes q8_decode; do
     a="$(count "$kind" "$n")"
     b="$(count "$kind" "$((2 * n))")"
     per[$kind]="$(python3 -c "print(f'{($b - $a) / $n:.1f}')")"
     printf '%-14s %14s %14s %12s\n' "$kind" "$a" "$b" "${per[$kind]}"
 done
 echo
-for kind in sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast; do
+for kind in sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast q8_ml q8_map q8_bayes; do
+    loop=noop
+    [[ $kind == q8_* ]] && loop=q8_noop
     python3 -c "
-g, s, n = ${per[$kind]}, ${per[sigmoid]}, ${per[noop]}
-print(f'$kind / sigmoid = {g / s:.3f} (net of the loop: {(g - n) / (s - n):.3f})')"
+g, s, n, m = ${per[$kind]}, ${per[sigmoid]}, ${per[$loop]}, ${per[noop]}
+print(f'$kind / sigmoid = {g / s:.3f} (net of the loop: {(g - n) / (s - m):.3f})')"
 done

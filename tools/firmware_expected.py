@@ -10,6 +10,11 @@ scores come from the numpy reference (`mlmap_ref.bayes`, docs/DESIGN.md §1.6, f
 firmware checks its float32 results against these values within a tolerance, and exactly
 where the answer is `OS / K`.
 
+It also writes the quantized cases: int8 codes for the section of
+`tables/default_q8.mlmap` (whose scales and zero points are read here from the section's
+bytes, by docs/FORMAT.md), each with its dequantized logits `float32(q - zp) * scale` in
+float32 and the float64 scores of those logits, as above.
+
     python3 tools/firmware_expected.py [TABLE] [OUT]     # defaults: tables/default.mlmap,
                                                          #           firmware/src/expected.rs
     python3 tools/firmware_expected.py --check           # exit 1 if OUT is out of date
@@ -31,6 +36,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_TABLE = os.path.join(ROOT, "tables", "default.mlmap")
 DEFAULT_OUT = os.path.join(ROOT, "firmware", "src", "expected.rs")
 TEST_CSV = os.path.join(ROOT, "examples", "data", "test.csv")
+QUANTIZED = os.path.join(ROOT, "tables", "default_q8.mlmap")
 
 # Rows of examples/data/test.csv scored besides the synthetic cases.
 CSV_ROWS = 16
@@ -237,6 +243,53 @@ def cases(table):
     return out
 
 
+def quantization(data, table_crc):
+    """(bits, scales, zero points) of the quantized section at the end of `data`
+    (docs/FORMAT.md, "The quantized section"), after checking its CRC, magic, version and
+    the table it names."""
+    n, crc = struct.unpack("<II", data[-8:])
+    sec = data[-n:]
+    if zlib.crc32(sec[:-4]) & 0xFFFFFFFF != crc or sec[:4] != b"MLMQ" or sec[4] != 1:
+        raise ValueError("not a valid quantized section")
+    bits, flags = sec[5], sec[6]
+    k, bins_ml = struct.unpack("<HH", sec[8:12])
+    if struct.unpack("<I", sec[16:20])[0] != table_crc:
+        raise ValueError("the section was computed from another table")
+    pos, scales, zps = 32, [], []
+    width = 1 if bins_ml <= 256 else 2
+    for _ in range(k):
+        scale, zp, _start, n_ml = struct.unpack("<fiiI", sec[pos:pos + 16])
+        scales.append(np.float32(scale))
+        zps.append(zp)
+        pos += 16 + width * n_ml + 4 * bins_ml
+        _start, n_map = struct.unpack("<iI", sec[pos:pos + 8])
+        pos += 8 + 4 * n_map
+    assert bits == 8 and flags == 1, "the firmware checks an int8 section with the Bayes head"
+    return bits, scales, zps
+
+
+def quantized_cases(table, scales, zps):
+    """(label, codes) pairs: extremes, each class's mean, and the test rows' logits
+    rounded to codes."""
+    k = table["k"]
+    cls = table["classes"]
+
+    def code(x, c):
+        return int(min(127, max(-128, round(float(x) / float(scales[c])) + zps[c])))
+
+    out = [("every code -128", [-128] * k), ("every code 127", [127] * k),
+           ("every code 0", [0] * k), ("codes -128, 127, ...", [127 if i % 2 else -128 for i in range(k)])]
+    for i in range(k):
+        xs = [-128] * k
+        xs[i] = code(cls[i]["mean"], i)
+        out.append((f"only class {i} near its mean", xs))
+    with open(TEST_CSV) as fh:
+        for row in list(csv.DictReader(fh))[:CSV_ROWS]:
+            out.append((f"test.csv id {row['id']} as codes",
+                        [code(row[c["name"]], i) for i, c in enumerate(cls)]))
+    return out
+
+
 def error_cases(k):
     """(label, logits, objectness, expected error) for inputs the layer must reject."""
     f = np.float32
@@ -282,7 +335,7 @@ def render(table, source):
         f"//! `python3 tools/firmware_expected.py` from `{source}`.",
         "//! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.",
         "",
-        "use crate::case::{Case, ErrorCase, Expect};",
+        "use crate::case::{Case, ErrorCase, Expect, QCase};",
         "use mlmap::InferError;",
         "",
         "/// Number of classes of the table.",
@@ -326,6 +379,42 @@ def render(table, source):
             "        },",
             "    },",
         ]
+    with open(QUANTIZED, "rb") as fh:
+        _, scales, zps = quantization(fh.read(), table["crc"])
+    lines += [
+        "];",
+        "",
+        f"/// Scales of the quantized section of `{os.path.relpath(QUANTIZED, ROOT)}`.",
+        f"pub const Q_SCALES: [f32; K] = [{', '.join(lit(v) for v in scales)}];",
+        "/// Zero points of that section.",
+        f"pub const Q_ZERO_POINTS: [i32; K] = [{', '.join(str(z) for z in zps)}];",
+        "",
+        "/// int8 codes, their dequantized logits and the float64 scores of those.",
+        "pub static QCASES: &[QCase<K>] = &[",
+    ]
+    for n, (label, codes) in enumerate(quantized_cases(table, scales, zps)):
+        os_ = np.float32([1.0, 0.8, 0.55][n % 3])
+        logits = [np.float32(np.float32(q - z) * s) for q, z, s in zip(codes, zps, scales)]
+        (ml, ml_uniform), (mp, map_uniform) = layer(table, logits, os_)
+        bayes = bayes_scores(table, logits, os_)
+        lines += [
+            "    QCase {",
+            f"        codes: [{', '.join(str(q) for q in codes)}],",
+            "        case: Case {",
+            f"            label: {json.dumps(label)},",
+            f"            logits: [{', '.join(lit(x) for x in logits)}],",
+            f"            objectness: {lit(os_)},",
+        ]
+        for head, scores, uniform in (("ml", ml, ml_uniform), ("map", mp, map_uniform),
+                                      ("bayes", bayes, False)):
+            lines += [
+                f"            {head}: Expect {{",
+                f"                scores: [{', '.join(lit64(v) for v in scores)}],",
+                f"                uniform: {str(uniform).lower()},",
+                f"                argmax: {rust_opt(argmax(scores))},",
+                "            },",
+            ]
+        lines += ["        },", "    },"]
     lines += ["];", "", "/// Inputs the layer must reject, and the error it must give.",
               "pub static ERROR_CASES: &[ErrorCase<K>] = &["]
     for label, logits, os_, err in error_cases(k):

@@ -162,20 +162,28 @@ impl<'a> BayesView<'a> {
             }
             offset += b;
         }
-        // Every log-score is finite (the terms and priors are), so `max` is too.
-        let max = scratch.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        let mut total = 0.0f32;
-        for l in scratch.iter_mut() {
-            // exp(0) = 1 exactly for the largest: one `exp` saved.
-            *l = if *l == max { 1.0 } else { M::exp(*l - max) };
-            total += *l;
-        }
-        // `total >= 1`: the largest category contributes exp(0) = 1.
-        let scale = objectness / total;
-        for (o, &e) in out.iter_mut().zip(scratch.iter()) {
-            *o = e * scale;
-        }
+        softmax::<M>(scratch, objectness, out);
         Ok(())
+    }
+}
+
+/// The Bayes head's normalisation: the log-scores `l` (one per category, each finite)
+/// become `OS * exp(l[c] - max l) / sum_c' exp(l[c'] - max l)` for the first `out.len()`
+/// categories; `l` is overwritten. Shared by [`BayesView`] and the quantized table.
+#[inline(always)]
+pub(crate) fn softmax<M: Backend>(l: &mut [f32], objectness: f32, out: &mut [f32]) {
+    // Every log-score is finite (the terms and priors are), so `max` is too.
+    let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let mut total = 0.0f32;
+    for l in l.iter_mut() {
+        // exp(0) = 1 exactly for the largest: one `exp` saved.
+        *l = if *l == max { 1.0 } else { M::exp(*l - max) };
+        total += *l;
+    }
+    // `total >= 1`: the largest category contributes exp(0) = 1.
+    let scale = objectness / total;
+    for (o, &e) in out.iter_mut().zip(l.iter()) {
+        *o = e * scale;
     }
 }
 

@@ -323,6 +323,8 @@ impl<
 
     /// [`BoundedTable::decode`] on a cleared table.
     fn decode_inner(&mut self, bytes: &[u8]) -> Result<(), DecodeError> {
+        // A quantized section appended to the table is not part of it.
+        let bytes = crate::qtable::table_part(bytes);
         let (header, body) = wire::open(bytes)?;
         let k = usize::from(header.k);
         let (bins_ml, bins_map) = (usize::from(header.bins_ml), usize::from(header.bins_map));

@@ -79,6 +79,7 @@ impl Format for InferError {
             Self::Length => write!(f, "Length"),
             Self::Evidence => write!(f, "Evidence"),
             Self::NoBayesHead => write!(f, "NoBayesHead"),
+            Self::CodeRange { class } => write!(f, "CodeRange({})", class),
         }
     }
 }
@@ -201,5 +202,64 @@ impl Format for HistogramError {
 impl Format for GaussianError {
     fn format(&self, f: Formatter<'_>) {
         write!(f, "{=str}", self.message())
+    }
+}
+
+impl Format for crate::QField {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "{=str}", self.describe())
+    }
+}
+
+impl Format for crate::QTableError {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::NotQuantized => write!(f, "NotQuantized"),
+            Self::Corrupted => write!(f, "Corrupted"),
+            Self::UnsupportedVersion { found } => write!(f, "UnsupportedVersion({})", found),
+            Self::ShapeMismatch { expected, found } => {
+                write!(f, "ShapeMismatch({}, {})", expected, found)
+            }
+            Self::TableMismatch => write!(f, "TableMismatch"),
+            Self::Malformed => write!(f, "Malformed"),
+            Self::Invalid { field, class } => write!(f, "Invalid({}, class {})", field, class),
+        }
+    }
+}
+
+impl Format for crate::QuantizeError {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::Bits => write!(f, "Bits"),
+            Self::Length => write!(f, "Length"),
+            Self::Scale { class } => write!(f, "Scale({})", class),
+            Self::ZeroPoint { class } => write!(f, "ZeroPoint({})", class),
+            Self::NoBayesHead => write!(f, "NoBayesHead"),
+            Self::BufferTooSmall => write!(f, "BufferTooSmall"),
+            Self::TooLarge => write!(f, "TooLarge"),
+        }
+    }
+}
+
+impl<const K: usize, Q: crate::Code> Format for crate::QTable<'_, K, Q> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "QTable(K = {}, int{}, {} bytes, Bayes {})",
+            K,
+            Q::BITS,
+            self.section_len(),
+            self.has_bayes()
+        )
+    }
+}
+
+impl Format for crate::QParams<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "QParams(int{}, scales {=[?]}, zero points {=[?]}, Bayes {})",
+            self.bits, self.scales, self.zero_points, self.bayes
+        )
     }
 }

@@ -153,6 +153,8 @@ impl DynTable {
     /// As [`Table::from_bytes`](crate::Table::from_bytes), except that there is no
     /// shape to mismatch.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, DecodeError> {
+        // A quantized section appended to the table is not part of it.
+        let bytes = crate::qtable::table_part(bytes);
         let (header, body) = wire::open(bytes)?;
         let k = usize::from(header.k);
         let (bins_ml, bins_map) = (usize::from(header.bins_ml), usize::from(header.bins_map));

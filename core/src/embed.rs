@@ -3,6 +3,7 @@
 //! crate's own validation computed (see `embed_source.rs`).
 
 use crate::histogram::{Axis, Histogram};
+use crate::qtable::{Code, Meta, QClass, QLogit, QTable};
 use crate::{ClassName, Gaussian, Settings, Table};
 
 /// A histogram from validated fields.
@@ -78,5 +79,92 @@ pub const fn table<
         bayes_log_prior,
         bayes_lambda,
         bayes_log_lambda,
+    }
+}
+
+/// `len` bytes of `bytes` from `at`: a part of an embedded quantized section (a
+/// compile-time error if out of range; the build script only names validated parts).
+pub const fn part(bytes: &'static [u8], at: usize, len: usize) -> &'static [u8] {
+    bytes.split_at(at).1.split_at(len).0
+}
+
+/// `n` 4-byte values of bytes from `at`: a part of an embedded quantized section.
+pub const fn part4(bytes: &'static [u8], at: usize, n: usize) -> &'static [[u8; 4]] {
+    part(bytes, at, 4 * n).as_chunks::<4>().0
+}
+
+/// A quantized section's header fields, validated by the build script.
+#[allow(clippy::too_many_arguments)]
+pub const fn qmeta(
+    bits: u8,
+    k: u16,
+    bins_ml: u16,
+    bins_bayes: u16,
+    categories: u16,
+    table_crc: u32,
+    lambdas: [f32; 3],
+    log_prior: &'static [[u8; 4]],
+    len: usize,
+) -> Meta<'static> {
+    Meta {
+        bits,
+        k,
+        bins_ml,
+        bins_bayes,
+        categories,
+        table_crc,
+        lambda_ml: lambdas[0],
+        lambda_map: lambdas[1],
+        log_lambda: lambdas[2],
+        log_prior,
+        len,
+    }
+}
+
+/// One class of a quantized section, validated by the build script.
+pub const fn qclass(
+    scale: f32,
+    zero_point: i32,
+    ml: (i32, &'static [u8], &'static [[u8; 4]]),
+    map: (i32, &'static [[u8; 4]]),
+) -> QClass<'static> {
+    QClass {
+        scale,
+        zero_point,
+        ml_start: ml.0,
+        ml_index: ml.1,
+        ml_masses: ml.2,
+        map_start: map.0,
+        map_masses: map.1,
+    }
+}
+
+/// One Bayes logit of a quantized section, validated by the build script.
+pub const fn qlogit(
+    start: i32,
+    index: &'static [u8],
+    terms: &'static [[u8; 4]],
+) -> QLogit<'static> {
+    QLogit {
+        start,
+        index,
+        terms,
+    }
+}
+
+/// The logit of an embedded section without the Bayes head.
+pub const QLOGIT_NONE: QLogit<'static> = QLogit::EMPTY;
+
+/// A quantized table from validated parts.
+pub const fn qtable<const K: usize, Q: Code>(
+    meta: Meta<'static>,
+    classes: [QClass<'static>; K],
+    logits: [QLogit<'static>; K],
+) -> QTable<'static, K, Q> {
+    QTable {
+        meta,
+        classes,
+        logits,
+        code: core::marker::PhantomData,
     }
 }

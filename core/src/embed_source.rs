@@ -160,3 +160,124 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
     );
     s
 }
+
+/// Rust source defining `QUANTIZED_K`, `QUANTIZED_BITS`, `QuantizedCode`,
+/// `EmbeddedQTable`, `QUANTIZED_SOURCE`, `QUANTIZED_SECTION` (the section's bytes) and
+/// `QUANTIZED` (a [`QTable`](crate::QTable) over them, built without decoding) for the
+/// quantized section of `bytes` (a section alone, or a table file with one), read from
+/// `source`. The section is validated by [`DynQTable::from_bytes`](crate::DynQTable).
+///
+/// # Errors
+///
+/// The [`QTableError`](crate::QTableError) of an invalid or missing section.
+pub fn quantized_source(
+    bytes: &[u8],
+    source: &str,
+    krate: &str,
+) -> Result<String, crate::QTableError> {
+    let q = crate::DynQTable::from_bytes(bytes)?;
+    let section = bytes
+        .get(bytes.len() - q.section_len()..)
+        .unwrap_or_default();
+    let base = section.as_ptr() as usize;
+    // Every slice of `q` borrows `section`: name it by its offset.
+    let part = |p: &[u8]| {
+        if p.is_empty() {
+            return "&[]".into();
+        }
+        format!(
+            "E::part(&QUANTIZED_SECTION, {}, {})",
+            (p.as_ptr() as usize).wrapping_sub(base),
+            p.len()
+        )
+    };
+    let part4 = |p: &[[u8; 4]]| {
+        if p.is_empty() {
+            return "&[]".into();
+        }
+        format!(
+            "E::part4(&QUANTIZED_SECTION, {}, {})",
+            (p.as_ptr() as usize).wrapping_sub(base),
+            p.len()
+        )
+    };
+    let m = &q.meta;
+    let code = if m.bits == 8 { "i8" } else { "i16" };
+    let mut s = String::new();
+    let _ = writeln!(s, "use {krate}::__embed as E;");
+    let _ = writeln!(
+        s,
+        "/// Number of classes of the embedded quantized section.\npub const QUANTIZED_K: usize = {};",
+        m.k
+    );
+    let _ = writeln!(
+        s,
+        "/// Bits per code of the embedded quantized section.\npub const QUANTIZED_BITS: u8 = {};",
+        m.bits
+    );
+    let _ = writeln!(
+        s,
+        "/// The code type of the embedded quantized section.\npub type QuantizedCode = {code};"
+    );
+    let _ = writeln!(
+        s,
+        "/// The type of [`QUANTIZED`].\npub type EmbeddedQTable = {krate}::QTable<'static, QUANTIZED_K, QuantizedCode>;"
+    );
+    let _ = writeln!(
+        s,
+        "/// The file the quantized section was embedded from.\npub const QUANTIZED_SOURCE: &str = {source:?};"
+    );
+    let _ = writeln!(
+        s,
+        "/// The embedded section's bytes (`QTable::from_bytes` reads them too).\npub static QUANTIZED_SECTION: [u8; {}] = {:?};",
+        section.len(),
+        section
+    );
+    let classes: Vec<String> = q
+        .classes
+        .iter()
+        .map(|c| {
+            format!(
+                "E::qclass({}, {}, ({}, {}, {}), ({}, {}))",
+                f(c.scale),
+                c.zero_point,
+                c.ml_start,
+                part(c.ml_index),
+                part4(c.ml_masses),
+                c.map_start,
+                part4(c.map_masses)
+            )
+        })
+        .collect();
+    let logits: Vec<String> = (0..q.classes.len())
+        .map(|j| match q.logits.get(j) {
+            Some(l) => format!(
+                "E::qlogit({}, {}, {})",
+                l.start,
+                part(l.index),
+                part4(l.terms)
+            ),
+            None => "E::QLOGIT_NONE".into(),
+        })
+        .collect();
+    let _ = writeln!(
+        s,
+        "/// The embedded quantized section, validated at build time: no decoding at start-up.\n\
+         pub static QUANTIZED: EmbeddedQTable = E::qtable(\n    \
+         E::qmeta({}, {}, {}, {}, {}, 0x{:08x}, [{}, {}, {}], {}, {}),\n    [{}],\n    [{}],\n);",
+        m.bits,
+        m.k,
+        m.bins_ml,
+        m.bins_bayes,
+        m.categories,
+        m.table_crc,
+        f(m.lambda_ml),
+        f(m.lambda_map),
+        f(m.log_lambda),
+        part4(m.log_prior),
+        m.len,
+        classes.join(",\n     "),
+        logits.join(",\n     ")
+    );
+    Ok(s)
+}

@@ -263,6 +263,12 @@ pub enum InferError {
     /// The Bayes head was asked for, and the table has none (it was fitted with
     /// `--no-bayes`, or is a version-1 table).
     NoBayesHead,
+    /// A quantized logit is outside the code range of the quantized table (an int8
+    /// section given a code above 127 or below -128).
+    CodeRange {
+        /// Index of the first such code.
+        class: u16,
+    },
 }
 
 impl fmt::Display for InferError {
@@ -275,6 +281,10 @@ impl fmt::Display for InferError {
                 f.write_str("evidence is not finite and >= 0, or lambda is out of range")
             }
             Self::NoBayesHead => f.write_str("the table has no Bayes head"),
+            Self::CodeRange { class } => write!(
+                f,
+                "quantized logit of class {class} is outside the section's code range"
+            ),
         }
     }
 }

@@ -204,6 +204,21 @@ impl<F: AsRef<[f32]>> Histogram<F> {
     }
 }
 
+impl<F: AsRef<[f32]>> Histogram<F> {
+    /// The bin whose frequency [`Histogram::likelihood`] returns for `x` (the last bin
+    /// above `e_B` under [`UpperTail::Clamp`]), or `None` where it returns 0 without a
+    /// bin. The quantized table stores these bins per code.
+    pub(crate) fn likelihood_bin(&self, x: f32, tail: UpperTail) -> Option<usize> {
+        if x >= self.lo && x <= self.hi {
+            Some(self.bin_in_support(x))
+        } else if x > self.hi && tail == UpperTail::Clamp {
+            Some(self.bins().saturating_sub(1))
+        } else {
+            None
+        }
+    }
+}
+
 /// Width and reciprocal width of `n` equal bins over `[lo, hi]`, after checking that
 /// the edges are finite and that every inner edge `lo + k * w` is strictly above the
 /// previous one in `f32`.

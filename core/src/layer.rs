@@ -190,7 +190,7 @@ const TWO_POW_64: f32 = f32::from_bits(0x5f80_0000); // 2^64
 /// Turns the unnormalised masses in `a` (each finite and > 0) into scores summing to
 /// `objectness`; see the module docs. `suffix` is scratch space of the same length.
 #[inline(always)]
-fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
+pub(crate) fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
     let mut max = a.iter().copied().fold(0.0f32, f32::max);
     if max < TINY_MAX {
         // Exact: a power of two, and every product stays far below f32::MAX.
@@ -220,6 +220,34 @@ fn normalise(a: &mut [f32], suffix: &mut [f32], objectness: f32) {
     }
 }
 
+/// The ML head's unnormalised mass of one class for logit `x`: `L(x) + lambda`. The
+/// quantized table (`QTable`) precomputes its masses with this very function.
+#[inline(always)]
+pub(crate) fn ml_mass<F: AsRef<[f32]>>(
+    h: &Histogram<F>,
+    lambda: f32,
+    tail: UpperTail,
+    x: f32,
+) -> f32 {
+    h.likelihood(x, tail) + lambda
+}
+
+/// The MAP head's unnormalised mass of one class for logit `x`: `L(x) P(x) + lambda`,
+/// with `P` evaluated only where `L(x) > 0`. The quantized table precomputes its masses
+/// with this very function.
+#[inline(always)]
+pub(crate) fn map_mass<F: AsRef<[f32]>, M: Backend>(
+    h: &Histogram<F>,
+    g: &Gaussian,
+    lambda: f32,
+    tail: UpperTail,
+    x: f32,
+) -> f32 {
+    let l = h.likelihood(x, tail);
+    let lp = if l > 0.0 { l * g.pdf::<M>(x) } else { 0.0 };
+    lp + lambda
+}
+
 /// ML scores of one detection into `out` (length K); `suffix` is scratch of length K.
 #[inline(always)]
 pub(crate) fn ml_into<F: AsRef<[f32]>>(
@@ -233,7 +261,7 @@ pub(crate) fn ml_into<F: AsRef<[f32]>>(
 ) -> Result<(), InferError> {
     check(logits, objectness, hists.len(), out.len())?;
     for ((o, h), &x) in out.iter_mut().zip(hists).zip(logits) {
-        *o = h.likelihood(x, tail) + lambda;
+        *o = ml_mass(h, lambda, tail, x);
     }
     normalise(out, suffix, objectness);
     Ok(())
@@ -254,9 +282,7 @@ pub(crate) fn map_into<F: AsRef<[f32]>, M: Backend>(
 ) -> Result<(), InferError> {
     check(logits, objectness, hists.len(), out.len())?;
     for (((o, h), g), &x) in out.iter_mut().zip(hists).zip(priors).zip(logits) {
-        let l = h.likelihood(x, tail);
-        let lp = if l > 0.0 { l * g.pdf::<M>(x) } else { 0.0 };
-        *o = lp + lambda;
+        *o = map_mass::<_, M>(h, g, lambda, tail, x);
     }
     normalise(out, suffix, objectness);
     Ok(())

@@ -37,12 +37,15 @@ mod dyn_table;
 #[cfg(feature = "alloc")]
 pub mod __embed_source {
     //! Build-script support: see `embed.rs`.
-    pub use crate::embed_source::rust_source;
+    pub use crate::embed_source::{quantized_source, rust_source};
 }
 #[doc(hidden)]
 pub mod __embed {
     //! `const` constructors for build-script output; not part of the API.
-    pub use crate::embed::{axis, class_name, gaussian, histogram, table};
+    pub use crate::embed::{
+        axis, class_name, gaussian, histogram, part, part4, qclass, qlogit, qmeta, qtable, table,
+        QLOGIT_NONE,
+    };
 }
 mod embed;
 #[cfg(feature = "alloc")]
@@ -54,6 +57,10 @@ mod histogram;
 mod layer;
 mod math;
 mod name;
+mod qtable;
+mod qtable_build;
+#[cfg(feature = "alloc")]
+mod qtable_dyn;
 mod table;
 mod view;
 mod wire;
@@ -68,6 +75,11 @@ pub use histogram::{
 pub use layer::{argmax, decide, scores_from_evidence, Scores};
 pub use math::{Backend, Libm};
 pub use name::{ClassName, NAME_MAX};
+pub use qtable::{
+    code_range, dequantize, Code, QField, QTable, QTableError, MAX_LOG_TERM, MAX_MASS,
+    QUANTIZED_MAGIC, QUANTIZED_VERSION,
+};
+pub use qtable_build::{quantize_into, quantized_len, QParams, QuantizeError};
 pub use table::Table;
 pub use view::TableView;
 pub use wire::{ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
@@ -75,6 +87,9 @@ pub use wire::{ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
 #[cfg(feature = "alloc")]
 #[cfg_attr(docsrs, doc(cfg(feature = "alloc")))]
 pub use dyn_table::{BayesSpec, DynTable};
+#[cfg(feature = "alloc")]
+#[cfg_attr(docsrs, doc(cfg(feature = "alloc")))]
+pub use qtable_dyn::DynQTable;
 
 pub use fastmath::{
     fast_math_max_score_error, FastMath, FAST_MATH_MAX_REL_ERROR, FAST_MATH_MAX_SCORE_ERROR,

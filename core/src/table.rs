@@ -206,6 +206,8 @@ impl<
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, DecodeError> {
         #[allow(clippy::let_unit_value)]
         let () = Self::SHAPE_OK;
+        // A quantized section appended to the table is not part of it.
+        let bytes = crate::qtable::table_part(bytes);
         let (header, body) = wire::open(bytes)?;
         if header.shape() != Self::SHAPE {
             return Err(DecodeError::ShapeMismatch {

@@ -57,7 +57,7 @@ pub(crate) const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC
 /// The same checksum computed bit by bit, for checking a table when it is decoded: no
 /// 1 KiB lookup table in flash (decoding checks a few hundred bytes once, at start-up).
 /// The table-driven [`CRC`] is only linked in by encoding.
-const CRC_CHECK: crc::Crc<u32, crc::NoTable> =
+pub(crate) const CRC_CHECK: crc::Crc<u32, crc::NoTable> =
     crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
 
 /// Length of the trailing checksum.
@@ -433,6 +433,30 @@ pub(crate) fn encode<'b, F: AsRef<[f32]>, G: AsRef<[f32]>>(
 ) -> Result<&'b mut [u8], EncodeError> {
     postcard::to_slice_crc32(&Message(view), buf, CRC.digest())
         .map_err(|_| EncodeError::BufferTooSmall)
+}
+
+/// The CRC-32 [`encode`] stores in the last four bytes of `view`'s encoding, computed
+/// without writing the encoding anywhere (the quantized section records it, to name the
+/// table it was computed from).
+pub(crate) fn table_crc<F: AsRef<[f32]>, G: AsRef<[f32]>>(view: &TableView<'_, F, G>) -> u32 {
+    /// A postcard output that only feeds the checksum.
+    struct Digest<'d>(crc::Digest<'d, u32>);
+    impl postcard::ser_flavors::Flavor for Digest<'_> {
+        type Output = u32;
+        fn try_push(&mut self, data: u8) -> postcard::Result<()> {
+            self.0.update(&[data]);
+            Ok(())
+        }
+        fn try_extend(&mut self, data: &[u8]) -> postcard::Result<()> {
+            self.0.update(data);
+            Ok(())
+        }
+        fn finalize(self) -> postcard::Result<u32> {
+            Ok(self.0.finalize())
+        }
+    }
+    // Serialising a validated table into this output cannot fail.
+    postcard::serialize_with_flavor(&Message(view), Digest(CRC.digest())).unwrap_or(0)
 }
 
 /// Number of bytes [`encode`] writes for `view`, CRC included.

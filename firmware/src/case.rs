@@ -40,3 +40,12 @@ pub struct ErrorCase<const K: usize> {
     /// The error every head must return.
     pub error: InferError,
 }
+
+/// A detection as int8 codes of the quantized section, with its dequantized logits
+/// (`case.logits`, computed in float32 on the host) and their expected scores.
+pub struct QCase<const K: usize> {
+    /// The codes.
+    pub codes: [i8; K],
+    /// The dequantized logits and what each head must answer for them.
+    pub case: Case<K>,
+}

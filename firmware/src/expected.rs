@@ -2,7 +2,7 @@
 //! `python3 tools/firmware_expected.py` from `tables/default.mlmap`.
 //! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.
 
-use crate::case::{Case, ErrorCase, Expect};
+use crate::case::{Case, ErrorCase, Expect, QCase};
 use mlmap::InferError;
 
 /// Number of classes of the table.
@@ -1192,6 +1192,544 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.8854658852591796, 1.692148614315698e-05, 2.08723198862832e-05],
             uniform: false,
             argmax: Some(0),
+        },
+    },
+];
+
+/// Scales of the quantized section of `tables/default_q8.mlmap`.
+pub const Q_SCALES: [f32; K] = [0.08, 0.08, 0.08];
+/// Zero points of that section.
+pub const Q_ZERO_POINTS: [i32; K] = [0, 0, 0];
+
+/// int8 codes, their dequantized logits and the float64 scores of those.
+pub static QCASES: &[QCase<K>] = &[
+    QCase {
+        codes: [-128, -128, -128],
+        case: Case {
+            label: "every code -128",
+            logits: [-10.24, -10.24, -10.24],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+                uniform: true,
+                argmax: None,
+            },
+            map: Expect {
+                scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+                uniform: true,
+                argmax: None,
+            },
+            bayes: Expect {
+                scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [127, 127, 127],
+        case: Case {
+            label: "every code 127",
+            logits: [10.16, 10.16, 10.16],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.26666667064030963, 0.26666667064030963, 0.26666667064030963],
+                uniform: true,
+                argmax: None,
+            },
+            map: Expect {
+                scores: [0.26666667064030963, 0.26666667064030963, 0.26666667064030963],
+                uniform: true,
+                argmax: None,
+            },
+            bayes: Expect {
+                scores: [0.44636000665128167, 0.06672000099420541, 0.1269200018912557],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [0, 0, 0],
+        case: Case {
+            label: "every code 0",
+            logits: [0.0, 0.0, 0.0],
+            objectness: 0.55,
+            ml: Expect {
+                scores: [0.060133604363787334, 0.40106289465360656, 0.08880351290353505],
+                uniform: false,
+                argmax: Some(1),
+            },
+            map: Expect {
+                scores: [0.018398416086730988, 0.4237582992952902, 0.10784329653890783],
+                uniform: false,
+                argmax: Some(1),
+            },
+            bayes: Expect {
+                scores: [0.0002917837299583599, 0.04013155227698078, 0.029504384240693782],
+                uniform: false,
+                argmax: Some(1),
+            },
+        },
+    },
+    QCase {
+        codes: [-128, 127, -128],
+        case: Case {
+            label: "codes -128, 127, ...",
+            logits: [-10.24, 10.16, -10.24],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+                uniform: true,
+                argmax: None,
+            },
+            map: Expect {
+                scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+                uniform: true,
+                argmax: None,
+            },
+            bayes: Expect {
+                scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [53, -128, -128],
+        case: Case {
+            label: "only class 0 near its mean",
+            logits: [4.24, -10.24, -10.24],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.7487778527460321, 0.025611079587448418, 0.025611079587448418],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.7972871443719872, 0.0013564337744708483, 0.0013564337744708483],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.7540388944069745, 0.0003954949411775564, 0.0007523413958971114],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [-128, 29, -128],
+        case: Case {
+            label: "only class 1 near its mean",
+            logits: [-10.24, 2.32, -10.24],
+            objectness: 0.55,
+            ml: Expect {
+                scores: [0.015742132975273337, 0.5185157459703823, 0.015742132975273337],
+                uniform: false,
+                argmax: Some(1),
+            },
+            map: Expect {
+                scores: [0.0011552583933369482, 0.547689495134255, 0.0011552583933369482],
+                uniform: false,
+                argmax: Some(1),
+            },
+            bayes: Expect {
+                scores: [0.009711154034582257, 0.2982079261727867, 0.15940689137434783],
+                uniform: false,
+                argmax: Some(1),
+            },
+        },
+    },
+    QCase {
+        codes: [-128, -128, 36],
+        case: Case {
+            label: "only class 2 near its mean",
+            logits: [-10.24, -10.24, 2.8799999],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.022742421532950075, 0.022742421532950075, 0.9545151569340998],
+                uniform: false,
+                argmax: Some(2),
+            },
+            map: Expect {
+                scores: [0.0018093235414353723, 0.0018093235414353723, 0.9963813529171293],
+                uniform: false,
+                argmax: Some(2),
+            },
+            bayes: Expect {
+                scores: [0.010950931395691643, 0.06346221191143002, 0.7842718473245902],
+                uniform: false,
+                argmax: Some(2),
+            },
+        },
+    },
+    QCase {
+        codes: [33, -47, -46],
+        case: Case {
+            label: "test.csv id 25001 as codes",
+            logits: [2.6399999, -3.76, -3.6799998],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.554253912309447, 0.1495884743268369, 0.09615762528464504],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.7675105433302271, 0.01657893276991725, 0.015910535820784624],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.6487334489310251, 6.853860777003832e-05, 5.2853965488452225e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [-19, -27, 59],
+        case: Case {
+            label: "test.csv id 25002 as codes",
+            logits: [-1.52, -2.1599998, 4.72],
+            objectness: 0.55,
+            ml: Expect {
+                scores: [0.02885235193410888, 0.05086744620531667, 0.4702802137815034],
+                uniform: false,
+                argmax: Some(2),
+            },
+            map: Expect {
+                scores: [0.006002207910078212, 0.00958912331794464, 0.5344086806929061],
+                uniform: false,
+                argmax: Some(2),
+            },
+            bayes: Expect {
+                scores: [0.00018789394282847665, 0.001105127498358773, 0.46066940941672857],
+                uniform: false,
+                argmax: Some(2),
+            },
+        },
+    },
+    QCase {
+        codes: [-57, 53, 20],
+        case: Case {
+            label: "test.csv id 25003 as codes",
+            logits: [-4.56, 4.24, 1.5999999],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.02721882826603401, 0.5494025710596986, 0.42337860067426747],
+                uniform: false,
+                argmax: Some(1),
+            },
+            map: Expect {
+                scores: [0.00326504971033135, 0.47040401389942454, 0.526330936390244],
+                uniform: false,
+                argmax: Some(2),
+            },
+            bayes: Expect {
+                scores: [4.4510956218419945e-06, 0.6982352764297374, 0.27656541869410073],
+                uniform: false,
+                argmax: Some(1),
+            },
+        },
+    },
+    QCase {
+        codes: [-66, 34, -46],
+        case: Case {
+            label: "test.csv id 25004 as codes",
+            logits: [-5.2799997, 2.72, -3.6799998],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.02030439705279854, 0.7396121303959147, 0.0400834844722157],
+                uniform: false,
+                argmax: Some(1),
+            },
+            map: Expect {
+                scores: [0.001722660488480397, 0.7965446003421568, 0.0017327510902917706],
+                uniform: false,
+                argmax: Some(1),
+            },
+            bayes: Expect {
+                scores: [0.0003167075792823076, 0.7371351407194957, 0.01550450546922828],
+                uniform: false,
+                argmax: Some(1),
+            },
+        },
+    },
+    QCase {
+        codes: [21, -62, -47],
+        case: Case {
+            label: "test.csv id 25005 as codes",
+            logits: [1.68, -4.96, -3.76],
+            objectness: 0.55,
+            ml: Expect {
+                scores: [0.29615448146027157, 0.10204229564746084, 0.15180323481319652],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.39747408329660905, 0.07609941672628882, 0.07642651189803111],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.31969499502482684, 9.494396402145536e-05, 9.2208280871688e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [19, -25, -55],
+        case: Case {
+            label: "test.csv id 25006 as codes",
+            logits: [1.52, -2.0, -4.4],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.3903956512948776, 0.3167224459625911, 0.2928819027425314],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.4597159612723066, 0.313179880223428, 0.22710415850426552],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.43087237286286983, 0.0002187951453132807, 0.00012270999797231433],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [50, -54, -46],
+        case: Case {
+            label: "test.csv id 25007 as codes",
+            logits: [4.0, -4.3199997, -3.6799998],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.6925135614334058, 0.05916408339839142, 0.04832236708913172],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.7971839052129512, 0.0014113347940711866, 0.001404771913906516],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.7844531107970681, 1.0083150349019376e-05, 1.5663497027596325e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [-30, -48, 50],
+        case: Case {
+            label: "test.csv id 25008 as codes",
+            logits: [-2.3999999, -3.84, 4.0],
+            objectness: 0.55,
+            ml: Expect {
+                scores: [0.017309943739402547, 0.05316005604062171, 0.4795300121409047],
+                uniform: false,
+                argmax: Some(2),
+            },
+            map: Expect {
+                scores: [0.0017580381909270487, 0.0018109436557031753, 0.5464310300742987],
+                uniform: false,
+                argmax: Some(2),
+            },
+            bayes: Expect {
+                scores: [7.34192355359262e-05, 0.0021411447237223214, 0.5123791029441452],
+                uniform: false,
+                argmax: Some(2),
+            },
+        },
+    },
+    QCase {
+        codes: [43, -44, -46],
+        case: Case {
+            label: "test.csv id 25009 as codes",
+            logits: [3.4399998, -3.52, -3.6799998],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.8220443691363607, 0.10832363712322299, 0.06963199374041637],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.9940557660526074, 0.003075516715752079, 0.002868717231640579],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.9322811059657917, 3.3237583854635476e-05, 2.9200247439423692e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [53, -28, -34],
+        case: Case {
+            label: "test.csv id 25010 as codes",
+            logits: [4.24, -2.24, -2.72],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.7130472986410831, 0.04299836556925691, 0.04395434771058902],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.7964786040635503, 0.0020708089433501974, 0.00145059891402848],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.7619929960207268, 1.0987944071117515e-05, 2.2148371045981435e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [55, -36, -64],
+        case: Case {
+            label: "test.csv id 25011 as codes",
+            logits: [4.4, -2.8799999, -5.12],
+            objectness: 0.55,
+            ml: Expect {
+                scores: [0.4745318230095477, 0.04807674704268175, 0.027391441868699483],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.5478480965653993, 0.0011656330994048666, 0.0009862822561247605],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.5349382154680736, 6.407494474314696e-06, 1.556859163597611e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [73, -24, -38],
+        case: Case {
+            label: "test.csv id 25012 as codes",
+            logits: [5.8399997, -1.92, -3.04],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.7611747126840754, 0.09666368976172762, 0.14216159755419694],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.9744250345541426, 0.014815824194072937, 0.010759141251784449],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.984101016097041, 4.8439304262151005e-05, 7.35917829900054e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [56, -40, -43],
+        case: Case {
+            label: "test.csv id 25013 as codes",
+            logits: [4.48, -3.1999998, -3.4399998],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.675381157843354, 0.06842560921857317, 0.05619324485900187],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.7968686088306637, 0.0016603389457595854, 0.001471064144505679],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.7881460479006732, 2.1530402103857107e-05, 2.919766514596056e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [-59, -83, 35],
+        case: Case {
+            label: "test.csv id 25014 as codes",
+            logits: [-4.72, -6.64, 2.8],
+            objectness: 0.55,
+            ml: Expect {
+                scores: [0.012477400534703344, 0.013837483474207957, 0.5236851279120176],
+                uniform: false,
+                argmax: Some(2),
+            },
+            map: Expect {
+                scores: [0.001168773721440647, 0.0011687752424487082, 0.5476624629570396],
+                uniform: false,
+                argmax: Some(2),
+            },
+            bayes: Expect {
+                scores: [0.00010282593533492285, 0.009129417300815526, 0.5102631044716452],
+                uniform: false,
+                argmax: Some(2),
+            },
+        },
+    },
+    QCase {
+        codes: [50, -47, -58],
+        case: Case {
+            label: "test.csv id 25015 as codes",
+            logits: [4.0, -3.76, -4.64],
+            objectness: 1.0,
+            ml: Expect {
+                scores: [0.8575028210718689, 0.09308289425511054, 0.049414284673020475],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.9964240860273847, 0.0018296300116761406, 0.0017462839609391153],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.979384952860657, 1.6129364698267863e-05, 1.813381322375907e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
+        },
+    },
+    QCase {
+        codes: [57, -49, -45],
+        case: Case {
+            label: "test.csv id 25016 as codes",
+            logits: [4.56, -3.9199998, -3.6],
+            objectness: 0.8,
+            ml: Expect {
+                scores: [0.695534180664099, 0.05750143506207614, 0.046964396194753844],
+                uniform: false,
+                argmax: Some(0),
+            },
+            map: Expect {
+                scores: [0.7970088092748026, 0.001509100118244457, 0.0014821025278819917],
+                uniform: false,
+                argmax: Some(0),
+            },
+            bayes: Expect {
+                scores: [0.7905063395831688, 1.5106784229658908e-05, 1.8633920816819705e-05],
+                uniform: false,
+                argmax: Some(0),
+            },
         },
     },
 ];

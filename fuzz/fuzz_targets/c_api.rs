@@ -78,7 +78,9 @@ fuzz_target!(|data: &[u8]| {
 
     let mut u = Unstructured::new(calls);
     for _ in 0..8 {
-        let Ok(c) = Call::arbitrary(&mut u) else { break };
+        let Ok(c) = Call::arbitrary(&mut u) else {
+            break;
+        };
         let n_logits = usize::from(c.n_logits) % 20;
         let rows = usize::from(c.rows) % 8;
         let mut logits = c.logits.clone();
@@ -86,10 +88,26 @@ fuzz_target!(|data: &[u8]| {
         let out_len = usize::from(c.out_len) % 64;
         let mut out = vec![-7.0f32; out_len.max(1)];
         let os = vec![c.objectness; rows.max(1)];
-        let table = if c.null_table { core::ptr::null() } else { t.cast_const() };
-        let lp = if c.null_logits { core::ptr::null() } else { logits.as_ptr() };
-        let op = if c.null_out { core::ptr::null_mut() } else { out.as_mut_ptr() };
-        let osp = if c.null_objectness { core::ptr::null() } else { os.as_ptr() };
+        let table = if c.null_table {
+            core::ptr::null()
+        } else {
+            t.cast_const()
+        };
+        let lp = if c.null_logits {
+            core::ptr::null()
+        } else {
+            logits.as_ptr()
+        };
+        let op = if c.null_out {
+            core::ptr::null_mut()
+        } else {
+            out.as_mut_ptr()
+        };
+        let osp = if c.null_objectness {
+            core::ptr::null()
+        } else {
+            os.as_ptr()
+        };
         let mut done = usize::MAX;
         // SAFETY: every non-NULL pointer has the length passed with it.
         let (one, batch) = unsafe {

@@ -17,6 +17,16 @@ pub fn open(path: &Path) -> Result<DataSource, HostError> {
     Ok(DataSource::open(path)?)
 }
 
+/// Opens a data source of quantized logits (an NPY directory's logits `int8` or
+/// `int16`); see [`DataSource::open_codes`].
+///
+/// # Errors
+///
+/// As [`open`].
+pub fn open_codes(path: &Path) -> Result<DataSource, HostError> {
+    Ok(DataSource::open_codes(path)?)
+}
+
 /// `PATH:LINE` for a CSV line, `PATH: row index I` for an NPY row (as data errors).
 pub fn at(path: &Path, location: Location) -> String {
     match location {

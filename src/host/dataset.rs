@@ -151,8 +151,24 @@ impl DataSource {
     /// A [`DataError`] when the path does not exist or cannot be read, or when a header
     /// breaks a rule of DESIGN §2 (see the [module docs](self)).
     pub fn open(path: &Path) -> Result<Self, DataError> {
+        Self::open_with(path, false)
+    }
+
+    /// As [`DataSource::open`], for quantized logits (`mlmap apply --quantized`): an
+    /// NPY directory's `logits.npy` must be `int8` or `int16` (a CSV file's logits are
+    /// read as numbers, whose integrality the caller checks). Rows give the codes as
+    /// exact `f64` values.
+    ///
+    /// # Errors
+    ///
+    /// As [`DataSource::open`].
+    pub fn open_codes(path: &Path) -> Result<Self, DataError> {
+        Self::open_with(path, true)
+    }
+
+    fn open_with(path: &Path, codes: bool) -> Result<Self, DataError> {
         let (classes, format) = if path.is_dir() {
-            let (classes, schema) = npy_dir::Schema::open(path)?;
+            let (classes, schema) = npy_dir::Schema::open_with(path, codes)?;
             (classes, Format::Npy(schema))
         } else if path
             .extension()

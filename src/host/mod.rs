@@ -10,7 +10,7 @@
 //! [`tune::tune`]), so they can be called without the binary.
 
 pub use self::error::HostError;
-pub use mlmap_core::{BayesSpec, DynTable};
+pub use mlmap_core::{BayesSpec, DynQTable, DynTable};
 
 pub mod baselines;
 pub mod data;

@@ -32,6 +32,10 @@ mod apply;
 /// plots and the selectable ECE convention.
 mod eval;
 
+/// `quantize` and `apply --quantized`: the output equals `apply` on the dequantized
+/// logits byte for byte (CSV, NPY int8 and int16); bad codes, tables and parameters.
+mod quantize;
+
 /// `inspect`: the text and JSON reports of a table; stdout closed early or failing.
 mod inspect;
 

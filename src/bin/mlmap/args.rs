@@ -49,6 +49,8 @@ pub enum Command {
     Demo(DemoArgs),
     /// Write a table as a C header (its bytes as a `const uint8_t[]`), for C firmware.
     ExportC(crate::cmd::export_c::ExportCArgs),
+    /// Append a quantized section (int8 or int16 logits) to a table.
+    Quantize(crate::cmd::quantize::QuantizeArgs),
 }
 
 /// The fit settings of `fit` and of `stats` (pass a).
@@ -276,6 +278,10 @@ pub struct ApplyArgs {
     /// The CSV file to write.
     #[arg(long, short, value_name = "FILE.csv")]
     pub output: PathBuf,
+    /// The logits are quantized codes (CSV integers, NPY int8 or int16), scored through
+    /// the table's quantized section (`mlmap quantize`).
+    #[arg(long)]
+    pub quantized: bool,
 }
 
 /// Output format of `eval` and `inspect`.

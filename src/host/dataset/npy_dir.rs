@@ -309,6 +309,10 @@ impl<'a> Column<'a> {
         match (elem, big) {
             (Elem::F32, false) => decode(raw, out, |b| f64::from(f32::from_le_bytes(b))),
             (Elem::F32, true) => decode(raw, out, |b| f64::from(f32::from_be_bytes(b))),
+            // Quantized logits (`DataSource::open_codes`): exact in f64.
+            (Elem::I8, _) => decode(raw, out, |b: [u8; 1]| f64::from(b[0] as i8)),
+            (Elem::I16, false) => decode(raw, out, |b| f64::from(i16::from_le_bytes(b))),
+            (Elem::I16, true) => decode(raw, out, |b| f64::from(i16::from_be_bytes(b))),
             (_, false) => decode(raw, out, f64::from_le_bytes),
             (_, true) => decode(raw, out, f64::from_be_bytes),
         }
@@ -391,10 +395,31 @@ impl<'a> Column<'a> {
 
 impl Schema {
     /// Reads and checks every array header and `classes.txt`; returns the class names
-    /// and the schema.
-    pub(super) fn open(dir: &Path) -> Result<(Vec<String>, Self), DataError> {
+    /// and the schema. With `codes`, the logits are quantized: an `int8` or `int16` array instead of a
+    /// float one.
+    pub(super) fn open_with(dir: &Path, codes: bool) -> Result<(Vec<String>, Self), DataError> {
         let logits_path = dir.join("logits.npy");
-        let (logits, shape) = check_array(&logits_path, true, 2, "(N, K): N rows of K logits")?;
+        const CODES: &str = "int8 or int16 (quantized logits)";
+        let (logits, shape) = check_array(&logits_path, !codes, 2, "(N, K): N rows of K logits")
+            .map_err(|e| match e.kind() {
+                DataErrorKind::NpyDtype { found, .. } if codes => DataError::new(
+                    &logits_path,
+                    DataErrorKind::NpyDtype {
+                        found: found.clone(),
+                        expected: CODES,
+                    },
+                ),
+                _ => e,
+            })?;
+        if codes && !matches!(logits.elem, Elem::I8 | Elem::I16) {
+            return Err(DataError::new(
+                &logits_path,
+                DataErrorKind::NpyDtype {
+                    found: std::format!("{:?}", logits.elem).to_lowercase(),
+                    expected: CODES,
+                },
+            ));
+        }
         let (rows, k) = match shape.as_slice() {
             [n, k] => (*n, usize::try_from(*k).unwrap_or(usize::MAX)),
             _ => (0, 0),

@@ -1,11 +1,14 @@
-//! `mlmap apply`: score every row through the layer, write CSV (DESIGN §4).
+//! `mlmap apply`: score every row through the layer, write CSV (DESIGN §4). With
+//! `--quantized`, the logits are integer codes scored through the table file's
+//! quantized section; the output is what `apply` writes for the dequantized logits.
 
 use std::fmt::Write as _;
 
 use mlmap::host::data::{self, at, check_classes};
 use mlmap::host::dataset::Label;
 use mlmap::host::metrics::decision;
-use mlmap::{FastMath, Libm};
+use mlmap::host::DynQTable;
+use mlmap::{code_range, dequantize, FastMath, Head, Libm};
 
 use crate::args::ApplyArgs;
 use crate::error::{CliError, Result};
@@ -14,14 +17,33 @@ use crate::shared::read_table;
 
 pub fn run(args: &ApplyArgs) -> Result<()> {
     output::check_outputs(&args.output, &[&args.table, &args.input])?;
-    let (table, _) = read_table(&args.table)?;
-    let src = data::open(&args.input)?;
+    let (table, bytes) = read_table(&args.table)?;
+    let quantized = if args.quantized {
+        let q = DynQTable::from_bytes(&bytes).map_err(|e| {
+            CliError::input(
+                &args.table,
+                format!("{e} (--quantized needs a table written by `mlmap quantize`)"),
+            )
+        })?;
+        Some(q)
+    } else {
+        None
+    };
+    let src = if args.quantized {
+        data::open_codes(&args.input)?
+    } else {
+        data::open(&args.input)?
+    };
     check_classes(&args.input, src.classes(), table.class_names())?;
     let names: Vec<&str> = table.class_names().collect();
     let k = names.len();
-    // The Bayes head's columns only when the table has it; its scratch holds one
-    // float per category.
-    let bayes_cats = table.bayes().map(|b| b.categories());
+    // The Bayes head's columns only when the table (or the quantized section) has it;
+    // its scratch holds one float per category.
+    let bayes_cats = match &quantized {
+        Some(q) if !q.has_bayes() => None,
+        _ => table.bayes().map(|b| b.categories()),
+    };
+    let mut codes = vec![0i32; k];
     let out_path = &args.output;
     let csv_err = |e: csv::Error| CliError::internal(out_path, format!("cannot write: {e}"));
     output::write_atomic(out_path, |w| {
@@ -54,22 +76,49 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
         // allocation per row.
         let mut number = String::new();
         src.for_each_row(|row| -> Result<()> {
-            for (d, &s) in x.iter_mut().zip(row.logits) {
-                *d = s as f32;
-            }
             let os = row.objectness as f32;
             let at = |e: mlmap::InferError| {
                 CliError::Input(format!("{}: {e}", at(&args.input, row.location())))
             };
-            table.ml_into(&x, os, &mut ml, &mut scratch).map_err(at)?;
-            table
-                .map_into::<Libm>(&x, os, &mut map, &mut scratch)
-                .map_err(at)?;
-            if bayes_cats.is_some() {
-                // The device's default backend for this head (`Table::bayes`).
+            if let Some(q) = &quantized {
+                let (lo, hi) = code_range(q.bits());
+                for (i, (c, &v)) in codes.iter_mut().zip(row.logits).enumerate() {
+                    if !(v.fract() == 0.0 && (f64::from(lo)..=f64::from(hi)).contains(&v)) {
+                        return Err(CliError::Input(format!(
+                            "{}: logit of class {} is {v}, not an integer code in [{lo}, {hi}] \
+                             ({}-bit quantized logits)",
+                            data::at(&args.input, row.location()),
+                            names.get(i).copied().unwrap_or(""),
+                            q.bits()
+                        )));
+                    }
+                    *c = v as i32;
+                }
+                // The dequantized logits, for the tie-safe decision.
+                for ((d, &c), i) in x.iter_mut().zip(&codes).zip(0..) {
+                    let (s, z) = q.params(i).unwrap_or((1.0, 0));
+                    *d = dequantize(c, s, z);
+                }
+                q.score_into(Head::Ml, &codes, os, &mut ml).map_err(at)?;
+                q.score_into(Head::Map, &codes, os, &mut map).map_err(at)?;
+                if bayes_cats.is_some() {
+                    q.score_into(Head::Bayes, &codes, os, &mut bayes)
+                        .map_err(at)?;
+                }
+            } else {
+                for (d, &s) in x.iter_mut().zip(row.logits) {
+                    *d = s as f32;
+                }
+                table.ml_into(&x, os, &mut ml, &mut scratch).map_err(at)?;
                 table
-                    .bayes_into::<FastMath>(&x, os, &mut bayes, &mut bayes_scratch)
+                    .map_into::<Libm>(&x, os, &mut map, &mut scratch)
                     .map_err(at)?;
+                if bayes_cats.is_some() {
+                    // The device's default backend for this head (`Table::bayes`).
+                    table
+                        .bayes_into::<FastMath>(&x, os, &mut bayes, &mut bayes_scratch)
+                        .map_err(at)?;
+                }
             }
             if src.has_ids() {
                 csv.write_field(row.id.unwrap_or("")).map_err(csv_err)?;

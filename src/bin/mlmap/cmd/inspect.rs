@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use mlmap::host::names::Named;
-use mlmap::host::DynTable;
+use mlmap::host::{DynQTable, DynTable};
 use mlmap::{BayesView, Histogram};
 
 use crate::args::{Format, InspectArgs};
@@ -174,6 +174,68 @@ fn bayes_json(b: &BayesView<'_>, names: &[&str]) -> serde_json::Value {
     })
 }
 
+/// A window of stored codes as text: `[first, last]`, or `none`.
+fn window_text(w: Option<(i32, usize)>) -> String {
+    match w {
+        Some((first, n)) if n > 0 => format!("[{first}, {}]", i64::from(first) + n as i64 - 1),
+        Some(_) => "none".into(),
+        None => "-".into(),
+    }
+}
+
+/// The quantized section in text.
+fn quantized_text(s: &mut String, q: &DynQTable<'_>, names: &[&str]) {
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "quantized  int{} codes, section {} bytes (CRC-32 verified), heads ML, MAP{}",
+        q.bits(),
+        q.section_len(),
+        if q.has_bayes() { ", Bayes" } else { "" }
+    );
+    let _ = writeln!(
+        s,
+        "  codes stored per class (outside them: lambda, or ln lambda for Bayes)"
+    );
+    for (c, name) in names.iter().enumerate() {
+        let (scale, zp) = q.params(c).unwrap_or((0.0, 0));
+        let [ml, map, bayes] = q.windows(c).unwrap_or([None; 3]);
+        let _ = writeln!(
+            s,
+            "  {name:<12} scale {scale}, zero point {zp}; ML {}, MAP {}, Bayes {}",
+            window_text(ml),
+            window_text(map),
+            window_text(bayes)
+        );
+    }
+}
+
+/// The quantized section in JSON.
+fn quantized_json(q: &DynQTable<'_>, names: &[&str]) -> serde_json::Value {
+    let classes: Vec<serde_json::Value> = names
+        .iter()
+        .enumerate()
+        .map(|(c, name)| {
+            let (scale, zp) = q.params(c).unwrap_or((0.0, 0));
+            let [ml, map, bayes] = q.windows(c).unwrap_or([None; 3]);
+            serde_json::json!({
+                "name": name,
+                "scale": scale,
+                "zero_point": zp,
+                "ml_codes": ml,
+                "map_codes": map,
+                "bayes_codes": bayes,
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "bits": q.bits(),
+        "bytes": q.section_len(),
+        "bayes": q.has_bayes(),
+        "classes": classes,
+    })
+}
+
 /// The text report.
 fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -> String {
     let st = t.settings();
@@ -240,8 +302,24 @@ fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -
     s
 }
 
+/// The file's table bytes and its quantized section, if it has one.
+fn split(bytes: &[u8]) -> (&[u8], Option<DynQTable<'_>>) {
+    match DynQTable::from_bytes(bytes) {
+        Ok(q) => (
+            bytes.get(..bytes.len() - q.section_len()).unwrap_or(bytes),
+            Some(q),
+        ),
+        Err(_) => (bytes, None),
+    }
+}
+
 /// The JSON report.
-fn render_json(path: &std::path::Path, t: &DynTable, bytes: &[u8]) -> String {
+fn render_json(
+    path: &std::path::Path,
+    t: &DynTable,
+    bytes: &[u8],
+    quantized: Option<&DynQTable<'_>>,
+) -> String {
     let st = t.settings();
     let names: Vec<&str> = t.class_names().collect();
     let hist = |h: &Histogram<Vec<f32>>| {
@@ -276,6 +354,7 @@ fn render_json(path: &std::path::Path, t: &DynTable, bytes: &[u8]) -> String {
         "lambda_map": st.lambda_map,
         "classes": classes,
         "bayes": t.bayes().map(|b| bayes_json(&b, &names)),
+        "quantized": quantized.map(|q| quantized_json(q, &names)),
     });
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
@@ -283,10 +362,18 @@ fn render_json(path: &std::path::Path, t: &DynTable, bytes: &[u8]) -> String {
 }
 
 pub fn run(args: &InspectArgs) -> Result<()> {
-    let (table, bytes) = read_table(&args.table)?;
+    let (table, file) = read_table(&args.table)?;
+    let (bytes, quantized) = split(&file);
     let text = match args.format {
-        Format::Json => render_json(&args.table, &table, &bytes),
-        Format::Text | Format::Markdown => render_text(&args.table, &table, &bytes, args.bins),
+        Format::Json => render_json(&args.table, &table, bytes, quantized.as_ref()),
+        Format::Text | Format::Markdown => {
+            let mut s = render_text(&args.table, &table, bytes, args.bins);
+            if let Some(q) = &quantized {
+                let names: Vec<&str> = table.class_names().collect();
+                quantized_text(&mut s, q, &names);
+            }
+            s
+        }
     };
     output::print(&text)
 }

@@ -9,6 +9,7 @@ pub mod export_c;
 pub mod fit;
 pub mod inspect;
 pub mod merge;
+pub mod quantize;
 pub mod stats;
 pub mod tune;
 
@@ -27,5 +28,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Inspect(a) => inspect::run(a),
         Command::Demo(a) => demo::run(a),
         Command::ExportC(a) => export_c::run(a),
+        Command::Quantize(a) => quantize::run(a),
     }
 }

@@ -1,0 +1,202 @@
+//! Quantized sections: any bytes either fail to read or give a `QTable` whose scores keep
+//! invariant 1 of DESIGN §1.3 for any codes, with `QTable` (int8 and int16) and the host's
+//! `DynQTable` agreeing bit for bit; and a section built from the shipped table with any
+//! quantization scores, for any codes, exactly as the `f32` table on the dequantized
+//! logits (DESIGN §6.19).
+//!
+//! The first byte picks the mode: even, the rest is a section (tried as given, and with
+//! its trailer's length and CRC made valid, so that mutations get past the checksum);
+//! odd, the rest gives the quantization (code width, scales, zero points) and codes.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use mlmap::host::{DynQTable, DynTable};
+use mlmap::invariants::{check_scores, Sum};
+use mlmap::{dequantize, quantize_into, Head, QParams, QTable, Table};
+use mlmap_fuzz::must;
+
+type Shipped = Table<3, 22, 17, 22, 4>;
+const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
+
+fuzz_target!(|data: &[u8]| {
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    if mode % 2 == 0 {
+        read_all(rest);
+        read_all(&with_valid_trailer(rest));
+    } else {
+        build(rest);
+    }
+});
+
+/// `bytes` with the trailer's length set to the whole input and its CRC recomputed.
+fn with_valid_trailer(bytes: &[u8]) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    if b.len() < 8 {
+        return b;
+    }
+    let n = b.len();
+    let len = u32::try_from(n).unwrap_or(u32::MAX).to_le_bytes();
+    b[n - 8..n - 4].copy_from_slice(&len);
+    let crc = crc32(&b[..n - 4]);
+    b[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    b
+}
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &byte in bytes {
+        crc ^= u32::from(byte);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// Codes worth trying on any section: the range ends, 0, and a spread.
+const CODES: [i16; 9] = [i16::MIN, -200, -128, -1, 0, 1, 127, 300, i16::MAX];
+
+fn read_all(bytes: &[u8]) {
+    let dynq = DynQTable::from_bytes(bytes);
+    if let Err(e) = &dynq {
+        assert!(!e.to_string().is_empty());
+    }
+    let q8 = QTable::<3, i8>::from_bytes(bytes);
+    let q16 = QTable::<3, i16>::from_bytes(bytes);
+    let Ok(d) = dynq else {
+        assert!(
+            q8.is_err() && q16.is_err(),
+            "QTable accepts what DynQTable refuses"
+        );
+        return;
+    };
+    assert_eq!(q8.is_ok(), d.k() == 3 && d.bits() == 8);
+    assert_eq!(q16.is_ok(), d.k() == 3 && d.bits() == 16);
+    let k = d.k();
+    let (lo, hi) = mlmap::code_range(d.bits());
+    for (n, &a) in CODES.iter().enumerate() {
+        let codes: Vec<i32> = (0..k)
+            .map(|c| i32::from(CODES[(n + c * 4) % CODES.len()]).clamp(lo, hi))
+            .collect();
+        let codes = {
+            let mut c = codes;
+            c[0] = i32::from(a).clamp(lo, hi);
+            c
+        };
+        for os in [1.0f32, 0.3] {
+            for head in [Head::Ml, Head::Map, Head::Bayes] {
+                let mut out = vec![0.0f32; k];
+                match d.score_into(head, &codes, os, &mut out) {
+                    Ok(()) => {
+                        let sum = if head == Head::Bayes {
+                            Sum::AtMost
+                        } else {
+                            Sum::Equal
+                        };
+                        must(
+                            check_scores(&out, os, sum),
+                            format_args!("{head:?} {codes:?}"),
+                        );
+                        let fixed = match (&q8, &q16) {
+                            (Ok(q), _) => {
+                                let c: [i8; 3] = std::array::from_fn(|i| codes[i] as i8);
+                                Some(match head {
+                                    Head::Ml => q.ml(&c, os),
+                                    Head::Map => q.map(&c, os),
+                                    Head::Bayes => q.bayes(&c, os),
+                                })
+                            }
+                            (_, Ok(q)) => {
+                                let c: [i16; 3] = std::array::from_fn(|i| codes[i] as i16);
+                                Some(match head {
+                                    Head::Ml => q.ml(&c, os),
+                                    Head::Map => q.map(&c, os),
+                                    Head::Bayes => q.bayes(&c, os),
+                                })
+                            }
+                            _ => None,
+                        };
+                        if let Some(s) = fixed {
+                            let s = s.expect("QTable scores what DynQTable scores");
+                            assert_eq!(
+                                s.0.map(f32::to_bits).to_vec(),
+                                out.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                            );
+                        }
+                    }
+                    Err(e) => assert_eq!(
+                        head == Head::Bayes && !d.has_bayes(),
+                        e == mlmap::InferError::NoBayesHead,
+                        "{e:?}"
+                    ),
+                }
+            }
+        }
+    }
+}
+
+/// Reads `n` little-endian bytes from the front of `data` (zeros past its end).
+fn take<const N: usize>(data: &mut &[u8]) -> [u8; N] {
+    let mut out = [0u8; N];
+    let n = N.min(data.len());
+    out[..n].copy_from_slice(&data[..n]);
+    *data = &data[n..];
+    out
+}
+
+fn build(mut data: &[u8]) {
+    let t = Shipped::from_bytes(SHIPPED).expect("the shipped table decodes");
+    let d = &mut data;
+    let bits = if take::<1>(d)[0] % 2 == 0 { 8 } else { 16 };
+    let (lo, hi) = mlmap::code_range(bits);
+    let scales: [f32; 3] = std::array::from_fn(|_| f32::from_le_bytes(take::<4>(d)));
+    let zps: [i32; 3] = std::array::from_fn(|_| i32::from(i16::from_le_bytes(take::<2>(d))));
+    let p = QParams {
+        bits,
+        scales: &scales,
+        zero_points: &zps,
+        bayes: true,
+    };
+    let len = mlmap::quantized_len(&t.view(), &p);
+    let mut buf = vec![0u8; *len.as_ref().unwrap_or(&0)];
+    let bytes = match len.and_then(|_| quantize_into(&t.view(), &p, &mut buf)) {
+        Ok(b) => b,
+        Err(e) => {
+            // Only bad parameters are refused.
+            let bad_scale = scales.iter().any(|s| !(s.is_finite() && *s > 0.0));
+            let bad_zp = zps.iter().any(|z| !(lo..=hi).contains(z));
+            assert!(bad_scale || bad_zp, "{e:?} for {scales:?} {zps:?}");
+            return;
+        }
+    };
+    let q = DynQTable::from_bytes(bytes).expect("a built section reads back");
+    let dynt = DynTable::from_table(&t);
+    while !d.is_empty() {
+        let codes: Vec<i32> = (0..3)
+            .map(|_| i32::from(i16::from_le_bytes(take::<2>(d))).clamp(lo, hi))
+            .collect();
+        let os = f32::from(take::<1>(d)[0]) / 255.0;
+        let x: Vec<f32> = (0..3)
+            .map(|c| dequantize(codes[c], scales[c], zps[c]))
+            .collect();
+        for head in [Head::Ml, Head::Map, Head::Bayes] {
+            let (mut got, mut want) = ([0.0f32; 3], [0.0f32; 3]);
+            q.score_into(head, &codes, os, &mut got)
+                .expect("valid codes");
+            dynt.view()
+                .score_into(head, &x, os, &mut want, &mut [0.0; 4])
+                .expect("valid logits");
+            assert_eq!(
+                got.map(f32::to_bits),
+                want.map(f32::to_bits),
+                "{head:?} {codes:?} {x:?}"
+            );
+        }
+    }
+}

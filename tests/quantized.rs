@@ -1,0 +1,639 @@
+//! The quantized table (`QTable`, docs/FORMAT.md "The quantized section"): its heads
+//! equal the `f32` heads on the dequantized logits bit for bit (every int8 code of every
+//! class; int16 codes sampled and at the range ends; random tables and parameters), the
+//! section's size, the table file with a section appended, and every malformed section
+//! refused with its error and never a panic.
+
+use mlmap::invariants::{check_scores, Sum};
+use mlmap::{
+    dequantize, quantize_into, quantized_len, Code, QField, QParams, QTable, QTableError,
+    QuantizeError, Scores, Table,
+};
+
+use crate::support::{fix_crc, shipped, small_bayes, small_bayes_nobg, small_clamp, SHIPPED_MLMAP};
+
+/// The quantized section of `t` for `params`.
+fn section<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
+    t: &Table<3, BM, BP, BB, C>,
+    params: &QParams<'_>,
+) -> Vec<u8> {
+    let n = quantized_len(&t.view(), params).expect("valid parameters");
+    let mut buf = vec![0u8; n];
+    let written = quantize_into(&t.view(), params, &mut buf).expect("valid parameters");
+    assert_eq!(written.len(), n);
+    buf
+}
+
+fn bits<const K: usize>(s: Result<Scores<K>, mlmap::InferError>) -> [u32; K] {
+    s.expect("valid detection").0.map(f32::to_bits)
+}
+
+/// Every head of `q` against the `f32` table on the dequantized logits, for codes that
+/// run through every value of `all` for one class at a time, the others taking values
+/// from `others`.
+fn agree<const BM: usize, const BP: usize, const BB: usize, const C: usize, Q: Code + Copy>(
+    t: &Table<3, BM, BP, BB, C>,
+    q: &QTable<'_, 3, Q>,
+    (scales, zps): ([f32; 3], [i32; 3]),
+    all: &[Q],
+    others: &[Q],
+) -> usize {
+    let mut n = 0;
+    for c in 0..3 {
+        for &code in all {
+            for &a in others {
+                for &b in others {
+                    let mut codes = [a, b, a];
+                    codes[c] = code;
+                    let x: [f32; 3] =
+                        std::array::from_fn(|i| dequantize(codes[i].value(), scales[i], zps[i]));
+                    for os in [1.0f32, 0.37] {
+                        let what =
+                            || format!("codes {:?} x {x:?} os {os}", codes.map(|q| q.value()));
+                        assert_eq!(bits(q.ml(&codes, os)), bits(t.ml(&x, os)), "ML {}", what());
+                        assert_eq!(
+                            bits(q.map(&codes, os)),
+                            bits(t.map(&x, os)),
+                            "MAP {}",
+                            what()
+                        );
+                        if BB > 0 {
+                            let s = q.bayes(&codes, os);
+                            let mut want = [0.0f32; 3];
+                            t.view()
+                                .bayes_into::<mlmap::FastMath>(&x, os, &mut want, &mut [0.0; C])
+                                .unwrap();
+                            assert_eq!(bits(s), want.map(f32::to_bits), "Bayes {}", what());
+                        }
+                        n += 1;
+                    }
+                }
+            }
+        }
+    }
+    n
+}
+
+/// Quantization parameters worth trying on tables whose logits span about -9 to 9: one
+/// scale covering them, per-class scales and zero points, a coarse scale whose codes
+/// mostly fall outside every histogram, and a fine one covering a sliver.
+fn param_sets() -> Vec<([f32; 3], [i32; 3])> {
+    vec![
+        ([0.08; 3], [0; 3]),
+        ([0.05, 0.04, 0.06], [3, -7, 0]),
+        ([0.5; 3], [-100, 20, 127]),
+        ([0.001, 0.003, 0.0007], [127, -128, 0]),
+    ]
+}
+
+fn int8_everywhere<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
+    t: &Table<3, BM, BP, BB, C>,
+) {
+    let all: Vec<i8> = (i8::MIN..=i8::MAX).collect();
+    let others = [-128i8, -40, -1, 0, 37, 127];
+    for (scales, zps) in param_sets() {
+        let p = QParams {
+            bits: 8,
+            scales: &scales,
+            zero_points: &zps,
+            bayes: BB > 0,
+        };
+        let bytes = section(t, &p);
+        let q = QTable::<3, i8>::from_bytes(&bytes).expect("a built section is valid");
+        assert_eq!(q.has_bayes(), BB > 0);
+        let n = agree(t, &q, (scales, zps), &all, &others);
+        assert_eq!(n, 3 * 256 * 36 * 2);
+    }
+}
+
+#[test]
+fn int8_equals_f32_layer_for_every_code_shipped() {
+    int8_everywhere(&shipped());
+}
+
+#[test]
+fn int8_equals_f32_layer_for_every_code_small_tables() {
+    // The clamp policy (windows reaching the top code) and Bayes heads with and without
+    // background.
+    int8_everywhere(&small_clamp());
+    int8_everywhere(&small_bayes());
+    int8_everywhere(&small_bayes_nobg());
+}
+
+#[test]
+fn int16_equals_f32_layer_on_sampled_codes_and_range_ends() {
+    let t = shipped();
+    let mut sample: Vec<i16> = (i16::MIN..=i16::MAX).step_by(97).collect();
+    sample.extend([i16::MIN, i16::MIN + 1, -1, 0, 1, i16::MAX - 1, i16::MAX]);
+    let others = [i16::MIN, -9000, 0, 4000, i16::MAX];
+    for (scales, zps) in [
+        ([0.001f32; 3], [0i32; 3]),
+        ([0.0005, 0.0004, 0.0006], [-300, 1000, i16::MAX as i32]),
+    ] {
+        let p = QParams {
+            bits: 16,
+            scales: &scales,
+            zero_points: &zps,
+            bayes: true,
+        };
+        let bytes = section(&t, &p);
+        let q = QTable::<3, i16>::from_bytes(&bytes).unwrap();
+        agree(&t, &q, (scales, zps), &sample, &others);
+        // Codes around every class's zero point and the support edges.
+        let near: Vec<i16> = (-40..40)
+            .map(|d| (zps[0] + d).clamp(-32768, 32767) as i16)
+            .collect();
+        agree(&t, &q, (scales, zps), &near, &[0]);
+    }
+}
+
+/// The size formula of docs/FORMAT.md, with the windows counted from the `f32` tables'
+/// public histograms (the codes whose likelihood is in a bin of non-zero mass).
+#[test]
+fn shipped_int8_section_size() {
+    let t = shipped();
+    let (scales, zps) = ([0.08f32; 3], [0i32; 3]);
+    let window = |keep: &dyn Fn(i32) -> bool| {
+        let codes: Vec<i32> = (-128..=127).filter(|&q| keep(q)).collect();
+        codes.last().map_or(0, |l| (l - codes[0] + 1) as usize)
+    };
+    let mut size = 32 + 8;
+    for c in 0..3 {
+        let x = |q: i32| dequantize(q, scales[c], zps[c]);
+        let ml = t.ml_histogram(c).unwrap();
+        let map = t.map_histogram(c).unwrap();
+        let g = t.prior(c).unwrap();
+        let (lm, lp) = (t.settings().lambda_ml, t.settings().lambda_map);
+        let n_ml = window(&|q| ml.bin(x(q)).is_some_and(|b| ml.frequencies()[b] + lm != lm));
+        let n_map = window(&|q| {
+            map.bin(x(q)).is_some_and(|b| {
+                let f = map.frequencies()[b];
+                f > 0.0 && f * g.pdf::<mlmap::Libm>(x(q)) + lp != lp
+            })
+        });
+        size += 8 + 8 + n_ml + 4 * 22 + 8 + 4 * n_map;
+    }
+    let p = QParams {
+        bits: 8,
+        scales: &scales,
+        zero_points: &zps,
+        bayes: false,
+    };
+    let n = quantized_len(&t.view(), &p).unwrap();
+    assert_eq!(n, size);
+    assert!(
+        n <= 3 * 1024,
+        "ML and MAP int8 section of the shipped table: {n} bytes"
+    );
+    let with_bayes = quantized_len(&t.view(), &QParams { bayes: true, ..p }).unwrap();
+    assert!(with_bayes > n);
+    println!("shipped table, int8, scale 0.08: {n} bytes (ML, MAP), {with_bayes} with Bayes");
+}
+
+#[test]
+fn scores_keep_the_invariants() {
+    let t = shipped();
+    let bytes = section(
+        &t,
+        &QParams {
+            bits: 8,
+            scales: &[0.08; 3],
+            zero_points: &[0; 3],
+            bayes: true,
+        },
+    );
+    let q = QTable::<3, i8>::from_bytes(&bytes).unwrap();
+    for a in (-128..=127).step_by(5) {
+        for b in (-128..=127).step_by(7) {
+            let codes = [a as i8, b as i8, (a ^ b) as i8];
+            for os in [0.0f32, 1.0, 0.61] {
+                for s in [q.ml(&codes, os), q.map(&codes, os)] {
+                    check_scores(&s.unwrap().0, os, Sum::Equal).unwrap();
+                }
+                // Background takes a share: the class scores sum to at most OS.
+                check_scores(&q.bayes(&codes, os).unwrap().0, os, Sum::AtMost).unwrap();
+            }
+        }
+    }
+    // Codes outside every window: "I don't know", exactly OS / K.
+    let far = [-128i8; 3];
+    assert_eq!(q.ml(&far, 0.9).unwrap().0, [0.9f32 / 3.0; 3]);
+    assert_eq!(q.map(&far, 0.9).unwrap().0, [0.9f32 / 3.0; 3]);
+    for os in [f32::NAN, -0.1, 1.5] {
+        assert_eq!(q.ml(&far, os), Err(mlmap::InferError::Objectness));
+        assert_eq!(q.map(&far, os), Err(mlmap::InferError::Objectness));
+        assert_eq!(q.bayes(&far, os), Err(mlmap::InferError::Objectness));
+    }
+    let no_bayes = section(
+        &t,
+        &QParams {
+            bits: 8,
+            scales: &[0.08; 3],
+            zero_points: &[0; 3],
+            bayes: false,
+        },
+    );
+    let q = QTable::<3, i8>::from_bytes(&no_bayes).unwrap();
+    assert_eq!(q.bayes(&far, 0.5), Err(mlmap::InferError::NoBayesHead));
+}
+
+#[test]
+fn quantize_rejects_bad_parameters() {
+    let t = shipped();
+    let v = t.view();
+    let p = |bits, scales: &'static [f32], zero_points: &'static [i32]| QParams {
+        bits,
+        scales,
+        zero_points,
+        bayes: false,
+    };
+    let cases: [(QParams<'_>, QuantizeError); 7] = [
+        (p(4, &[0.1; 3], &[0; 3]), QuantizeError::Bits),
+        (p(8, &[0.1; 2], &[0; 3]), QuantizeError::Length),
+        (p(8, &[0.1; 3], &[0; 4]), QuantizeError::Length),
+        (
+            p(8, &[0.1, 0.0, 0.1], &[0; 3]),
+            QuantizeError::Scale { class: 1 },
+        ),
+        (
+            p(8, &[0.1, 0.1, f32::NAN], &[0; 3]),
+            QuantizeError::Scale { class: 2 },
+        ),
+        (
+            p(8, &[0.1; 3], &[0, 128, 0]),
+            QuantizeError::ZeroPoint { class: 1 },
+        ),
+        (
+            p(16, &[0.1; 3], &[-32769, 0, 0]),
+            QuantizeError::ZeroPoint { class: 0 },
+        ),
+    ];
+    for (params, want) in cases {
+        assert_eq!(quantized_len(&v, &params), Err(want), "{params:?}");
+        assert_eq!(quantize_into(&v, &params, &mut [0u8; 8192]), Err(want));
+    }
+    let ok = p(8, &[0.1; 3], &[0; 3]);
+    let n = quantized_len(&v, &ok).unwrap();
+    let mut buf = vec![0u8; n - 1];
+    assert_eq!(
+        quantize_into(&v, &ok, &mut buf),
+        Err(QuantizeError::BufferTooSmall)
+    );
+    let bayes = QParams { bayes: true, ..ok };
+    let v1 = crate::support::small();
+    assert_eq!(
+        quantized_len(&v1.view(), &bayes),
+        Err(QuantizeError::NoBayesHead)
+    );
+}
+
+fn shipped_section(bits: u8) -> Vec<u8> {
+    section(
+        &shipped(),
+        &QParams {
+            bits,
+            scales: &[0.08; 3],
+            zero_points: &[0; 3],
+            bayes: true,
+        },
+    )
+}
+
+#[test]
+fn table_file_with_a_section_appended() {
+    let sec = shipped_section(8);
+    let mut file = SHIPPED_MLMAP.to_vec();
+    file.extend_from_slice(&sec);
+    // The table decoders read the table part; the section reads the same from both.
+    assert_eq!(
+        crate::support::Shipped::from_bytes(&file).unwrap(),
+        shipped()
+    );
+    let a = QTable::<3, i8>::from_bytes(&file).unwrap();
+    let b = QTable::<3, i8>::from_bytes(&sec).unwrap();
+    let codes = [12i8, -5, 60];
+    assert_eq!(a.map(&codes, 1.0), b.map(&codes, 1.0));
+    assert_eq!(
+        a.table_crc(),
+        u32::from_le_bytes(SHIPPED_MLMAP[SHIPPED_MLMAP.len() - 4..].try_into().unwrap())
+    );
+    // A section computed from another table does not follow this one.
+    let other = section(
+        &small_bayes(),
+        &QParams {
+            bits: 8,
+            scales: &[0.08; 3],
+            zero_points: &[0; 3],
+            bayes: true,
+        },
+    );
+    let mut wrong = SHIPPED_MLMAP.to_vec();
+    wrong.extend_from_slice(&other);
+    assert_eq!(
+        QTable::<3, i8>::from_bytes(&wrong),
+        Err(QTableError::TableMismatch)
+    );
+    // A bare section is not a table; a table alone holds no section.
+    assert_eq!(
+        crate::support::Shipped::from_bytes(&sec),
+        Err(mlmap::DecodeError::NotATable)
+    );
+    assert_eq!(
+        QTable::<3, i8>::from_bytes(SHIPPED_MLMAP),
+        Err(QTableError::NotQuantized)
+    );
+}
+
+/// `section` with the little-endian bytes `v` written at `at`, the CRC fixed.
+fn patched(section: &[u8], at: usize, v: &[u8]) -> Vec<u8> {
+    let mut b = section.to_vec();
+    b[at..at + v.len()].copy_from_slice(v);
+    fix_crc(&b)
+}
+
+#[test]
+fn malformed_sections_are_refused_with_their_error() {
+    let sec = shipped_section(8);
+    let read = |b: &[u8]| QTable::<3, i8>::from_bytes(b).map(|_| ());
+    assert_eq!(read(&sec), Ok(()));
+    let invalid = |field, class| Err(QTableError::Invalid { field, class });
+    // Class 0's record starts after the 32-byte header: scale, zero point, ML window.
+    let cases: Vec<(Vec<u8>, Result<(), QTableError>)> = vec![
+        (patched(&sec, 0, b"MLMX"), Err(QTableError::NotQuantized)),
+        (
+            {
+                let mut b = sec.clone();
+                b[40] ^= 1;
+                b
+            },
+            Err(QTableError::Corrupted),
+        ),
+        (
+            patched(&sec, 4, &[2]),
+            Err(QTableError::UnsupportedVersion { found: 2 }),
+        ),
+        (
+            patched(&sec, 5, &[16]),
+            Err(QTableError::ShapeMismatch {
+                expected: (3, 8),
+                found: (3, 16),
+            }),
+        ),
+        (
+            patched(&sec, 8, &4u16.to_le_bytes()),
+            Err(QTableError::ShapeMismatch {
+                expected: (3, 8),
+                found: (4, 8),
+            }),
+        ),
+        (patched(&sec, 6, &[2]), Err(QTableError::Malformed)),
+        (patched(&sec, 7, &[1]), Err(QTableError::Malformed)),
+        (
+            patched(&sec, 14, &9u16.to_le_bytes()),
+            invalid(QField::Shape, 0),
+        ),
+        (
+            patched(&sec, 20, &0f32.to_le_bytes()),
+            invalid(QField::Lambda, 0),
+        ),
+        (
+            patched(&sec, 24, &f32::INFINITY.to_le_bytes()),
+            invalid(QField::Lambda, 0),
+        ),
+        (
+            patched(&sec, 28, &f32::NAN.to_le_bytes()),
+            invalid(QField::LogTerm, 0),
+        ),
+        (
+            patched(&sec, 32, &(-0.5f32).to_le_bytes()),
+            invalid(QField::Scale, 0),
+        ),
+        (
+            patched(&sec, 36, &128i32.to_le_bytes()),
+            invalid(QField::ZeroPoint, 0),
+        ),
+        (
+            patched(&sec, 40, &100i32.to_le_bytes()),
+            invalid(QField::Window, 0),
+        ),
+        (
+            patched(&sec, 40, &(-129i32).to_le_bytes()),
+            invalid(QField::Window, 0),
+        ),
+        (patched(&sec, 48, &[22]), invalid(QField::Index, 0)),
+    ];
+    for (i, (bytes, want)) in cases.into_iter().enumerate() {
+        assert_eq!(read(&bytes), want, "case {i}");
+    }
+    // A mass of 0 and a log-term of infinity, found by value.
+    let ml_masses_at = {
+        let n = u32::from_le_bytes(sec[44..48].try_into().unwrap()) as usize;
+        48 + n
+    };
+    assert_eq!(
+        read(&patched(&sec, ml_masses_at, &0f32.to_le_bytes())),
+        invalid(QField::Mass, 0)
+    );
+    let prior_at = sec.len() - 8 - 16;
+    assert_eq!(
+        read(&patched(&sec, prior_at + 12, &f32::INFINITY.to_le_bytes())),
+        invalid(QField::LogTerm, 3)
+    );
+    // Every truncation, and a byte added before the trailer.
+    for n in 0..sec.len() {
+        assert!(read(&sec[..n]).is_err(), "prefix of {n} bytes");
+        assert!(
+            read(&fix_crc(&sec[..n])).is_err(),
+            "prefix of {n} bytes, CRC fixed"
+        );
+    }
+    let mut longer = sec[..sec.len() - 8].to_vec();
+    longer.push(0);
+    let len = (longer.len() + 8) as u32;
+    longer.extend_from_slice(&len.to_le_bytes());
+    longer.extend_from_slice(&[0; 4]);
+    assert_eq!(read(&fix_crc(&longer)), Err(QTableError::Malformed));
+}
+
+/// Every byte of the section set to a few values, the CRC fixed: no panic, and any
+/// section that is accepted scores within the invariants.
+#[test]
+fn mutated_sections_never_panic() {
+    for bits in [8u8, 16] {
+        let sec = section(
+            &small_bayes(),
+            &QParams {
+                bits,
+                scales: &[0.1; 3],
+                zero_points: &[0; 3],
+                bayes: true,
+            },
+        );
+        let mut accepted = 0;
+        for i in 0..sec.len() - 4 {
+            for v in [0x00u8, 0x01, 0x7f, 0x80, 0xff, sec[i] ^ 0x10] {
+                let b = patched(&sec, i, &[v]);
+                let (a, b) = (
+                    QTable::<3, i8>::from_bytes(&b),
+                    QTable::<3, i16>::from_bytes(&b),
+                );
+                if let Ok(q) = a {
+                    accepted += 1;
+                    for codes in [[0i8; 3], [127, -128, 5], [-3, 40, -90]] {
+                        check_scores(&q.ml(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
+                        check_scores(&q.map(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
+                        check_scores(&q.bayes(&codes, 1.0).unwrap().0, 1.0, Sum::AtMost).unwrap();
+                    }
+                }
+                if let Ok(q) = b {
+                    accepted += 1;
+                    for codes in [[0i16; 3], [32767, -32768, 5]] {
+                        check_scores(&q.ml(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
+                        check_scores(&q.map(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
+                        check_scores(&q.bayes(&codes, 1.0).unwrap().0, 1.0, Sum::AtMost).unwrap();
+                    }
+                }
+            }
+        }
+        assert!(accepted > 0);
+    }
+}
+
+/// Random run-time shaped tables (K 2 to 5, random ML, MAP and Bayes heads, both tail
+/// policies) and random quantization parameters: `DynQTable` equals `DynTable` on the
+/// dequantized logits, bit for bit, for every int8 code of every class and for random
+/// int16 codes, and the scores keep invariant 1.
+#[cfg(feature = "std")]
+mod random {
+    use mlmap::host::{DynQTable, DynTable};
+    use mlmap::Head;
+    use proptest::prelude::*;
+
+    use super::*;
+    use crate::invariants::bayes::dyn_table;
+
+    fn quantization(k: usize) -> impl Strategy<Value = (u8, Vec<f32>, Vec<i32>, u64)> {
+        (prop_oneof![3 => Just(8u8), 1 => Just(16u8)], any::<u64>()).prop_flat_map(
+            move |(bits, seed)| {
+                let (lo, hi) = mlmap::code_range(bits);
+                (
+                    Just(bits),
+                    prop::collection::vec((-4.0f64..1.0).prop_map(|e| 10f64.powf(e) as f32), k),
+                    prop::collection::vec(lo..=hi, k),
+                    Just(seed),
+                )
+            },
+        )
+    }
+
+    fn check(
+        t: &DynTable,
+        q: &DynQTable<'_>,
+        codes: &[i32],
+        scales: &[f32],
+        zps: &[i32],
+    ) -> Result<(), TestCaseError> {
+        let k = codes.len();
+        let x: Vec<f32> = (0..k)
+            .map(|i| dequantize(codes[i], scales[i], zps[i]))
+            .collect();
+        let heads: &[Head] = if t.bayes().is_some() {
+            &[Head::Ml, Head::Map, Head::Bayes]
+        } else {
+            &[Head::Ml, Head::Map]
+        };
+        for &head in heads {
+            for os in [1.0f32, 0.43] {
+                let (mut got, mut want) = (vec![0.0f32; k], vec![0.0f32; k]);
+                q.score_into(head, codes, os, &mut got).unwrap();
+                t.view()
+                    .score_into(head, &x, os, &mut want, &mut vec![0.0; k + 1])
+                    .unwrap();
+                let (g, w): (Vec<u32>, Vec<u32>) = (
+                    got.iter().map(|v| v.to_bits()).collect(),
+                    want.iter().map(|v| v.to_bits()).collect(),
+                );
+                prop_assert_eq!(g, w, "{:?} codes {:?} x {:?}", head, codes, x);
+                let sum = if head == Head::Bayes && t.bayes().is_some_and(|b| b.has_background()) {
+                    Sum::AtMost
+                } else {
+                    Sum::Equal
+                };
+                check_scores(&got, os, sum).map_err(|v| TestCaseError::fail(v.to_string()))?;
+            }
+        }
+        Ok(())
+    }
+
+    fn case() -> impl Strategy<Value = (DynTable, (u8, Vec<f32>, Vec<i32>, u64))> {
+        (2usize..=5, 1usize..=8, any::<bool>()).prop_flat_map(|(k, bins, background)| {
+            (
+                dyn_table(k, bins, background).prop_map(|(_, t)| t),
+                quantization(k),
+            )
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+        #[test]
+        fn dyn_qtable_equals_dyn_table((t, (bits, scales, zps, code_seed)) in case()) {
+            let k = t.k();
+            let p = QParams { bits, scales: &scales, zero_points: &zps, bayes: true };
+            let n = quantized_len(&t.view(), &p).unwrap();
+            let mut buf = vec![0u8; n];
+            let bytes = quantize_into(&t.view(), &p, &mut buf).unwrap();
+            let q = DynQTable::from_bytes(bytes).unwrap();
+            prop_assert_eq!(q.k(), k);
+            let (lo, hi) = mlmap::code_range(bits);
+            let mut state = code_seed | 1;
+            let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; state };
+            let mut random_code = || lo + (next() % (hi - lo + 1) as u64) as i32;
+            if bits == 8 {
+                for c in 0..k {
+                    for code in lo..=hi {
+                        let mut codes: Vec<i32> = (0..k).map(|_| random_code()).collect();
+                        codes[c] = code;
+                        check(&t, &q, &codes, &scales, &zps)?;
+                    }
+                }
+            } else {
+                for _ in 0..512 {
+                    let codes: Vec<i32> = (0..k).map(|_| random_code()).collect();
+                    check(&t, &q, &codes, &scales, &zps)?;
+                }
+                check(&t, &q, &vec![lo; k], &scales, &zps)?;
+                check(&t, &q, &vec![hi; k], &scales, &zps)?;
+            }
+            // A code outside an int8 section's range is an error, not a lookup.
+            if bits == 8 {
+                let mut out = vec![0.0; k];
+                let mut codes = vec![0; k];
+                codes[k - 1] = 128;
+                prop_assert_eq!(
+                    q.score_into(Head::Ml, &codes, 1.0, &mut out),
+                    Err(mlmap::InferError::CodeRange { class: (k - 1) as u16 })
+                );
+            }
+        }
+    }
+}
+
+/// `tables/default_q8.mlmap` is the shipped table followed by its int8 section for scale
+/// 0.08 (what `mlmap quantize --scale 0.08` writes), and the section embedded at build
+/// time (`mlmap::embedded::quantized`) scores exactly as the one read from the file.
+#[test]
+fn shipped_quantized_file_and_embedded_section() {
+    let file = include_bytes!("../tables/default_q8.mlmap");
+    let mut want = SHIPPED_MLMAP.to_vec();
+    want.extend_from_slice(&shipped_section(8));
+    assert_eq!(&file[..], &want[..]);
+    use mlmap::embedded::quantized::{QUANTIZED, QUANTIZED_BITS, QUANTIZED_K, QUANTIZED_SECTION};
+    assert_eq!((QUANTIZED_K, QUANTIZED_BITS), (3, 8));
+    assert_eq!(&QUANTIZED_SECTION[..], &file[SHIPPED_MLMAP.len()..]);
+    let read = QTable::<3, i8>::from_bytes(file).unwrap();
+    assert_eq!(QUANTIZED, read);
+    for codes in [[0i8, 0, 0], [50, -20, 10], [127, -128, 3]] {
+        assert_eq!(QUANTIZED.bayes(&codes, 0.8), read.bayes(&codes, 0.8));
+    }
+}
