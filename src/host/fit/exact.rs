@@ -353,7 +353,11 @@ impl F32Sums {
             return false;
         }
         let fraction = bits & 0x7f_ffff;
-        let m = if e == 0 { fraction } else { fraction | 0x80_0000 };
+        let m = if e == 0 {
+            fraction
+        } else {
+            fraction | 0x80_0000
+        };
         let m = i64::from(m);
         let signed = if bits >> 31 != 0 { -m } else { m };
         if let Some(b) = self.values.get_mut(e) {
@@ -528,7 +532,11 @@ mod tests {
         ];
         v.extend((0..3 * F32_ROOM as u32).map(|i| ((i as f32) * 0.618).sin() * 3.0));
         v.extend((0..2000).map(|i| ((i as f32) * 0.7309).cos() * 10f32.powi(i % 61 - 30)));
-        let want = sums(&v.iter().map(|&x| f64::from(x)).collect::<std::vec::Vec<_>>());
+        let want = sums(
+            &v.iter()
+                .map(|&x| f64::from(x))
+                .collect::<std::vec::Vec<_>>(),
+        );
         let mut got = Sums::default();
         let mut buckets = F32Sums::default();
         for (i, &x) in v.iter().enumerate() {

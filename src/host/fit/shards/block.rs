@@ -305,8 +305,7 @@ impl FitCounts {
         if k == 0 {
             for (i, l) in labels.iter().enumerate() {
                 let c = l.category(k).unwrap_or(k);
-                if !with_row(c, k, &[] as &[T], |row| self.push(row)) && first_outside.is_none()
-                {
+                if !with_row(c, k, &[] as &[T], |row| self.push(row)) && first_outside.is_none() {
                     first_outside = Some(i);
                 }
             }
@@ -410,8 +409,12 @@ mod tests {
 
         let mut f32_blocks = FitStats::new(&CLASSES);
         let cut = 7 * 1001;
-        f32_blocks.push_rows(&logits[..3 * cut], &labels[..cut]).unwrap();
-        f32_blocks.push_rows(&logits[3 * cut..], &labels[cut..]).unwrap();
+        f32_blocks
+            .push_rows(&logits[..3 * cut], &labels[..cut])
+            .unwrap();
+        f32_blocks
+            .push_rows(&logits[3 * cut..], &labels[cut..])
+            .unwrap();
         assert_eq!(f32_blocks.to_bytes(), want.to_bytes());
 
         let wide: Vec<f64> = logits.iter().map(|&v| f64::from(v)).collect();
@@ -452,10 +455,7 @@ mod tests {
         let e = s.push_rows(&logits[..5], &labels[..2]).unwrap_err();
         assert_eq!(e.to_string(), "logits: logits holds 5 values; 6 are needed");
         let e = s.push_rows(&logits[..9], &[0i32, 3, 1]).unwrap_err();
-        assert!(
-            e.to_string().starts_with("labels: row index 1: "),
-            "{e}"
-        );
+        assert!(e.to_string().starts_with("labels: row index 1: "), "{e}");
         assert!(s.push_rows(&logits[..6], &[255u8, 0]).is_err());
         assert!(s.push_rows(&logits[..6], &[0i16, -2]).is_err());
         assert_eq!(s.to_bytes(), before);
