@@ -1,7 +1,9 @@
 //! Times the two passes of a sharded fit in memory: `ClassMoments::push` (one value),
 //! `FitStats::push` (pass (a)) and
-//! `FitCounts::push` (pass (b)) over synthetic rows, and a merge of two halves, and
-//! prints nanoseconds per row and per value on one `key=value` line:
+//! `FitCounts::push` (pass (b)) over synthetic rows, the same passes over the rows held
+//! as arrays (`push_rows` of `f32` logits and `i64` labels, in blocks of 16384 rows, as
+//! the Python package calls them), and a merge of two halves, and prints nanoseconds
+//! per row and per value on one `key=value` line:
 //!
 //! ```text
 //! cargo run --release --features std --example stats_timing -- [ROWS] [CLASSES]
@@ -96,6 +98,46 @@ fn main() -> ExitCode {
     }
     let pass_b = t.elapsed().as_secs_f64();
 
+    // The same rows as arrays: f32 logits, i64 labels (-1 background), pushed in
+    // blocks; the best of 5 runs of each pass.
+    let narrow: Vec<f32> = logits.iter().map(|&v| v as f32).collect();
+    let labels: Vec<i64> = (0..rows)
+        .map(|i| match label(i) {
+            Label::Class(c) => c as i64,
+            _ => -1,
+        })
+        .collect();
+    const BLOCK: usize = 16_384;
+    let (mut block_a, mut block_b) = (f64::INFINITY, f64::INFINITY);
+    let mut block_stats = FitStats::new(&classes);
+    let mut block_ok = true;
+    for _ in 0..5 {
+        let t = Instant::now();
+        let mut s = FitStats::new(&classes);
+        for (x, l) in narrow.chunks(BLOCK * k).zip(labels.chunks(BLOCK)) {
+            block_ok &= s.push_rows(black_box(x), l).is_ok();
+        }
+        block_a = block_a.min(t.elapsed().as_secs_f64());
+        block_stats = s;
+    }
+    let Ok(block_edges) = block_stats.edges(&params) else {
+        eprintln!("the synthetic rows cannot be fitted");
+        return ExitCode::from(1);
+    };
+    for _ in 0..5 {
+        let t = Instant::now();
+        let mut c = FitCounts::new(&block_edges);
+        for (x, l) in narrow.chunks(BLOCK * k).zip(labels.chunks(BLOCK)) {
+            block_ok &= c.push_rows(black_box(x), l) == Ok(None);
+        }
+        block_b = block_b.min(t.elapsed().as_secs_f64());
+        black_box(&c);
+    }
+    // The f64 path of the same values gives the same statistics.
+    let widened: Vec<f64> = narrow.iter().map(|&v| f64::from(v)).collect();
+    let mut wide_stats = FitStats::new(&classes);
+    block_ok &= wide_stats.push_rows(&widened, &labels).is_ok() && wide_stats == block_stats;
+
     let mut half = FitStats::new(&classes);
     for i in 0..rows / 2 {
         half.push(&row(i));
@@ -111,18 +153,21 @@ fn main() -> ExitCode {
     let table = finish(&stats, &counts);
     let finish_s = t.elapsed().as_secs_f64();
     black_box(&table);
-    if !(inside && merged && half == stats && table.is_ok()) {
+    if !(inside && merged && half == stats && table.is_ok() && block_ok) {
         eprintln!("the passes disagree");
         return ExitCode::from(1);
     }
     let ns = |s: f64, n: usize| s * 1e9 / n as f64;
     println!(
         "rows={rows} classes={k} moments_push_ns_per_value={:.2} plain_f64_sums_ns_per_value={:.2} \
-         pass_a_ns_per_row={:.1} pass_b_ns_per_row={:.1} merge_us={:.1} finish_us={:.1}",
+         pass_a_ns_per_row={:.1} pass_b_ns_per_row={:.1} block_f32_pass_a_ns_per_row={:.1} \
+         block_f32_pass_b_ns_per_row={:.1} merge_us={:.1} finish_us={:.1}",
         ns(push_s, rows * k),
         ns(plain_s, rows * k),
         ns(pass_a, rows),
         ns(pass_b, rows),
+        ns(block_a, rows),
+        ns(block_b, rows),
         merge_s * 1e6,
         finish_s * 1e6,
     );

@@ -12,7 +12,8 @@ use std::path::Path;
 
 use mlmap::host::dataset::{DataError, DataErrorKind, RowSource};
 use mlmap::host::fit::{
-    self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitParams, FitStats, TrainingSet,
+    self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitLabel, FitLogit, FitParams,
+    FitStats, TrainingSet,
 };
 use mlmap::host::names::Named;
 use mlmap::host::tune::{self as host_tune, BayesGrid, Guards, Objective, TuneParams};
@@ -26,7 +27,7 @@ use rayon::prelude::*;
 use crate::arrays::{self, value_error};
 use crate::errors::host_error;
 use crate::evaluate;
-use crate::source::{self, ArraySource};
+use crate::source::{self, ArraySource, BlockSink};
 use crate::table::PyTable;
 
 /// Rows per range of a parallel pass: below it, one range.
@@ -217,18 +218,40 @@ fn in_order<T, E>(results: Vec<Result<T, E>>) -> Result<Vec<T>, E> {
     results.into_iter().collect()
 }
 
+/// Pass (a) of blocks of rows.
+struct StatsSink(FitStats);
+
+impl BlockSink for StatsSink {
+    type Error = DataError;
+
+    fn block<T: FitLogit, L: FitLabel>(
+        &mut self,
+        src: &ArraySource<'_>,
+        first: usize,
+        logits: &[T],
+        labels: &[L],
+    ) -> Result<(), DataError> {
+        // A bad label: the row-by-row reading names it as the data files do.
+        self.0
+            .push_rows(logits, labels)
+            .map_err(|_| src.first_error(first..first + labels.len()))
+    }
+}
+
 /// Pass (a) over `src`, in parallel.
 fn stats_of(src: &ArraySource<'_>) -> Result<FitStats, FitError> {
     let classes = src.classes().to_vec();
     let each = parts(src)
         .par_iter()
         .map(|p| {
-            let mut s = FitStats::new(&classes);
-            p.for_each_row(|row| {
-                s.push(&row);
-                Ok::<(), FitError>(())
-            })?;
-            Ok::<FitStats, FitError>(s)
+            let mut sink = StatsSink(FitStats::new(&classes));
+            if !p.for_each_block(&mut sink)? {
+                p.for_each_row(|row| {
+                    sink.0.push(&row);
+                    Ok::<(), FitError>(())
+                })?;
+            }
+            Ok::<FitStats, FitError>(sink.0)
         })
         .collect();
     let mut total = FitStats::new(&classes);
@@ -250,20 +273,45 @@ impl From<DataError> for CountError {
     }
 }
 
+/// Pass (b) of blocks of rows.
+struct CountsSink(FitCounts);
+
+impl BlockSink for CountsSink {
+    type Error = CountError;
+
+    fn block<T: FitLogit, L: FitLabel>(
+        &mut self,
+        src: &ArraySource<'_>,
+        first: usize,
+        logits: &[T],
+        labels: &[L],
+    ) -> Result<(), CountError> {
+        match self.0.push_rows(logits, labels) {
+            Ok(None) => Ok(()),
+            Ok(Some(i)) => Err(CountError::Outside((first + i) as u64)),
+            Err(_) => Err(CountError::Data(
+                src.first_error(first..first + labels.len()),
+            )),
+        }
+    }
+}
+
 /// Pass (b) over `src`, in parallel.
 fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
     let each = parts(src)
         .par_iter()
         .map(|p| {
-            let mut c = FitCounts::new(edges);
-            p.for_each_row(|row| {
-                if c.push(&row) {
-                    Ok(())
-                } else {
-                    Err(CountError::Outside(row.index))
-                }
-            })?;
-            Ok::<FitCounts, CountError>(c)
+            let mut sink = CountsSink(FitCounts::new(edges));
+            if !p.for_each_block(&mut sink)? {
+                p.for_each_row(|row| {
+                    if sink.0.push(&row) {
+                        Ok(())
+                    } else {
+                        Err(CountError::Outside(row.index))
+                    }
+                })?;
+            }
+            Ok::<FitCounts, CountError>(sink.0)
         })
         .collect();
     let mut total = FitCounts::new(edges);

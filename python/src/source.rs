@@ -6,6 +6,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use mlmap::host::dataset::{DataError, DataErrorKind, Label, Location, Row, RowSource};
+use mlmap::host::fit::{FitLabel, FitLogit};
 use numpy::prelude::*;
 use numpy::{PyArray1, PyReadonlyArray1, PyUntypedArray};
 use pyo3::prelude::*;
@@ -168,6 +169,95 @@ impl<'a> ArraySource<'a> {
 
     fn row_error(&self, path: &Path, i: usize, kind: DataErrorKind) -> DataError {
         DataError::new(path, kind).at(Location::Row(i as u64))
+    }
+}
+
+/// Rows per block of [`ArraySource::for_each_block`]: the labels and logits of a block
+/// stay in the first cache levels between its checks and its use.
+pub const BLOCK_ROWS: usize = 16_384;
+
+/// What takes the blocks of [`ArraySource::for_each_block`]: the arrays' own types.
+pub trait BlockSink {
+    /// Why it stopped.
+    type Error: From<DataError>;
+
+    /// Takes rows `first..first + labels.len()` (indices into the whole arrays): the
+    /// logits row-major, every one finite.
+    fn block<T: FitLogit, L: FitLabel>(
+        &mut self,
+        src: &ArraySource<'_>,
+        first: usize,
+        logits: &[T],
+        labels: &[L],
+    ) -> Result<(), Self::Error>;
+}
+
+impl ArraySource<'_> {
+    /// The rows in blocks of [`BLOCK_ROWS`], read in place: the fast path of the fit.
+    /// Each block's logits are checked finite first; at a bad value the block is read
+    /// row by row ([`RowSource::for_each_row`]), which returns the error it finds (so
+    /// the messages are the same). The labels are checked by the sink (the library's
+    /// `push_rows`), which may also call [`first_error`](Self::first_error). The
+    /// objectness is not read: the arrays were checked when they were taken.
+    ///
+    /// `Ok(false)`, and nothing read, without labels.
+    pub fn for_each_block<S: BlockSink>(&self, sink: &mut S) -> Result<bool, S::Error> {
+        let Some(labels) = self.labels else {
+            return Ok(false);
+        };
+        let k = self.classes.len();
+        let mut start = self.range.start;
+        while start < self.range.end {
+            let end = self.range.end.min(start + BLOCK_ROWS);
+            let values = start * k..end * k;
+            let finite = match self.logits {
+                Rows::F32(all) => all
+                    .get(values)
+                    .is_some_and(|x| x.iter().fold(true, |ok, v| ok & v.is_finite())),
+                Rows::F64(all) => all
+                    .get(values)
+                    .is_some_and(|x| x.iter().fold(true, |ok, v| ok & v.is_finite())),
+            };
+            if !finite {
+                return Err(self.first_error(start..end).into());
+            }
+            macro_rules! dispatch {
+                ($($v:ident),*) => {
+                    match labels {
+                        $(LabelColumn::$v(l) => {
+                            let l = l.get(start..end).unwrap_or(&[]);
+                            match self.logits {
+                                Rows::F32(x) => {
+                                    sink.block(self, start, x.get(start * k..end * k).unwrap_or(&[]), l)
+                                }
+                                Rows::F64(x) => {
+                                    sink.block(self, start, x.get(start * k..end * k).unwrap_or(&[]), l)
+                                }
+                            }
+                        })*
+                    }
+                };
+            }
+            dispatch!(I64, I32, I16, I8, U64, U32, U16, U8)?;
+            start = end;
+        }
+        Ok(true)
+    }
+
+    /// The first error of rows `range` as [`RowSource::for_each_row`] reports it (a
+    /// generic one if it finds none: the caller saw one).
+    pub fn first_error(&self, range: Range<usize>) -> DataError {
+        let first = range.start;
+        match self.slice(range).for_each_row(|_| Ok::<(), DataError>(())) {
+            Err(e) => e,
+            Ok(()) => DataError::new(
+                &self.path,
+                DataErrorKind::Io {
+                    reason: "the arrays changed while they were read".to_string(),
+                },
+            )
+            .at(Location::Row(first as u64)),
+        }
     }
 }
 

@@ -122,7 +122,9 @@ use crate::{Axis, ClassSpec, EdgeMode, Settings, TableError, UpperTail, MAX_LAMB
 
 pub use bayes::{BayesCounts, BayesMoments, BayesParams};
 pub use error::{warnings, FitError, FitWarning};
-pub use shards::{finish, FitCounts, FitEdges, FitFile, FitStats, STATS_FORMAT_VERSION};
+pub use shards::{
+    finish, FitCounts, FitEdges, FitFile, FitLabel, FitLogit, FitStats, STATS_FORMAT_VERSION,
+};
 pub use stats::{ClassHistogram, ClassMoments};
 
 use stats::BinCounter;

@@ -13,6 +13,7 @@ use crate::host::dataset::{Label, Row};
 use crate::host::BayesSpec;
 use crate::{Axis, EdgeMode, MAX_LAMBDA_BAYES};
 
+use super::shards::FitLogit;
 use super::stats::BinCounter;
 use super::{FitError, MAX_BINS};
 
@@ -113,6 +114,20 @@ impl BayesMoments {
                 *lo = lo.min(x);
                 *hi = hi.max(x);
             }
+        }
+    }
+
+    /// Adds one row of category `c` (a class, or K for background) with the logits
+    /// `x`: the same as [`push`](Self::push) of such a row.
+    #[inline]
+    pub(crate) fn push_values<T: FitLogit>(&mut self, c: usize, x: &[T]) {
+        if let Some(n) = self.rows.get_mut(c) {
+            *n += 1;
+        }
+        for ((lo, hi), &v) in self.min.iter_mut().zip(&mut self.max).zip(x) {
+            let v = v.to_f64();
+            *lo = lo.min(v);
+            *hi = hi.max(v);
         }
     }
 
@@ -249,6 +264,21 @@ impl BayesCounters {
         let mut inside = true;
         for (counter, &x) in self.counters.iter_mut().skip(start).zip(row.logits) {
             inside &= counter.add(x as f32);
+        }
+        inside
+    }
+
+    /// Counts one row of category `c` (a class, or K for background) with the logits
+    /// `x`: the same as [`add`](Self::add) of such a row.
+    #[inline]
+    pub(crate) fn add_values<T: FitLogit>(&mut self, c: usize, x: &[T]) -> bool {
+        if c >= self.categories {
+            return false;
+        }
+        let start = c * self.k;
+        let mut inside = true;
+        for (counter, &v) in self.counters.iter_mut().skip(start).zip(x) {
+            inside &= counter.add(v.to_f32());
         }
         inside
     }

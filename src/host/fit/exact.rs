@@ -305,6 +305,87 @@ impl Sums {
     }
 }
 
+/// Buckets of an [`F32Sums`]: one per biased `f32` exponent (255, NaN and infinities,
+/// is never filled).
+const F32_BUCKETS: usize = 256;
+
+/// Values an [`F32Sums`] takes between two flushes: a squared 24-bit mantissa is below
+/// 2^48, so 2^16 of them stay below 2^64 in a square bucket (and the signed sums of
+/// mantissas, below 2^40, far inside an `i64`).
+pub(crate) const F32_ROOM: usize = 1 << 16;
+
+/// Position (in units of `2^-1074`) of the mantissa of an `f32` of biased exponent `e`:
+/// `|x| = m 2^(max(e, 1) - 150)` and `-150 + 1074 = 924`.
+#[inline]
+fn f32_position(e: usize) -> u32 {
+    e.clamp(1, 254) as u32 + 924
+}
+
+/// The exact sum and sum of squares of `f32` values between two flushes into a
+/// [`Sums`]: per biased exponent, the signed sum of the 24-bit mantissas and the sum of
+/// their 48-bit squares. A value costs two integer additions and no shift; the caller
+/// flushes ([`flush_into`](Self::flush_into)) at least every [`F32_ROOM`] values.
+///
+/// An `f32` is an `f64` with a shorter mantissa, so the flushed sums are exactly those
+/// [`Sums::add`] gives for the same values converted to `f64`.
+#[derive(Debug, Clone)]
+pub(crate) struct F32Sums {
+    values: [i64; F32_BUCKETS],
+    squares: [u64; F32_BUCKETS],
+}
+
+impl Default for F32Sums {
+    fn default() -> Self {
+        Self {
+            values: [0; F32_BUCKETS],
+            squares: [0; F32_BUCKETS],
+        }
+    }
+}
+
+impl F32Sums {
+    /// Adds `x`; `false` (and nothing added) when it is NaN or infinite.
+    #[inline]
+    pub(crate) fn add(&mut self, x: f32) -> bool {
+        let bits = x.to_bits();
+        let e = ((bits >> 23) & 0xff) as usize;
+        if e == 0xff {
+            return false;
+        }
+        let fraction = bits & 0x7f_ffff;
+        let m = if e == 0 {
+            fraction
+        } else {
+            fraction | 0x80_0000
+        };
+        let m = i64::from(m);
+        let signed = if bits >> 31 != 0 { -m } else { m };
+        if let Some(b) = self.values.get_mut(e) {
+            *b += signed;
+        }
+        if let Some(b) = self.squares.get_mut(e) {
+            *b += (m * m) as u64;
+        }
+        true
+    }
+
+    /// Moves the buckets into `sums` (and empties them).
+    pub(crate) fn flush_into(&mut self, sums: &mut Sums) {
+        for (e, (v, sq)) in self.values.iter_mut().zip(&mut self.squares).enumerate() {
+            // A square bucket is 0 only when every mantissa added there was 0.
+            let (v, sq) = (std::mem::take(v), std::mem::take(sq));
+            if sq == 0 {
+                continue;
+            }
+            let pos = f32_position(e);
+            if v != 0 {
+                sums.sum.add(v < 0, u128::from(v.unsigned_abs()), pos);
+            }
+            sums.sum_sq.add(false, u128::from(sq), 2 * pos);
+        }
+    }
+}
+
 impl PartialEq for Sums {
     fn eq(&self, other: &Self) -> bool {
         self.exact() == other.exact()
@@ -432,6 +513,52 @@ mod tests {
         c2.merge(&d2);
         assert_eq!(c1, a1);
         assert_eq!(c2, a2);
+    }
+
+    #[test]
+    fn f32_buckets_give_the_sums_of_the_values_as_f64() {
+        // Every kind of f32: zeros, subnormals, the smallest and largest normals, both
+        // signs, and many values of one exponent (more than a flush interval).
+        let mut v: std::vec::Vec<f32> = std::vec![
+            0.0,
+            -0.0,
+            f32::from_bits(1),
+            -f32::from_bits(0x7f_ffff),
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            -f32::MAX,
+            1.5,
+            -2.75,
+        ];
+        v.extend((0..3 * F32_ROOM as u32).map(|i| ((i as f32) * 0.618).sin() * 3.0));
+        v.extend((0..2000).map(|i| ((i as f32) * 0.7309).cos() * 10f32.powi(i % 61 - 30)));
+        let want = sums(
+            &v.iter()
+                .map(|&x| f64::from(x))
+                .collect::<std::vec::Vec<_>>(),
+        );
+        let mut got = Sums::default();
+        let mut buckets = F32Sums::default();
+        for (i, &x) in v.iter().enumerate() {
+            if i % F32_ROOM == F32_ROOM - 1 {
+                buckets.flush_into(&mut got);
+            }
+            assert!(buckets.add(x));
+        }
+        buckets.flush_into(&mut got);
+        assert_eq!(got.exact(), want);
+        // By hand: the smallest subnormal is 2^-149 = 2^(925 - 1074); 2^-149 - 3 2^-149
+        // = -2 2^-149, and the squares 10 2^-298 = 10 2^(1850 - 2148).
+        let mut s = Sums::default();
+        let mut b = F32Sums::default();
+        for x in [f32::from_bits(1), -3.0 * f32::from_bits(1)] {
+            assert!(b.add(x));
+        }
+        b.flush_into(&mut s);
+        let (s1, s2) = s.exact();
+        assert_eq!(s1.to_bigint(), -(BigInt::from(2) << 925u32));
+        assert_eq!(s2.to_bigint(), BigInt::from(10) << 1850u32);
+        assert!(!b.add(f32::NAN) && !b.add(f32::INFINITY) && !b.add(f32::NEG_INFINITY));
     }
 
     #[test]

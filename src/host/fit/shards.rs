@@ -1,6 +1,10 @@
 //! The fit as two exact, mergeable passes over shards of the data: see the
 //! "Sharded fitting" section of [`crate::host::fit`].
 
+mod block;
+
+pub use block::{FitLabel, FitLogit};
+
 use std::path::Path;
 use std::string::{String, ToString};
 use std::vec::Vec;

@@ -6,7 +6,7 @@ use std::vec::Vec;
 use crate::{Axis, EdgeMode, VARIANCE_FLOOR};
 
 use super::binpicker;
-use super::exact::{self, Fixed, Sums};
+use super::exact::{self, F32Sums, Fixed, Sums};
 
 /// The exact state of a [`ClassMoments`] in canonical form (the serialized form).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -80,6 +80,25 @@ impl ClassMoments {
             Some((negative, m, pos)) => self.sums.add(negative, m, pos),
             None => self.non_finite = true,
         }
+    }
+
+    /// Adds a value that is an `f32`: the same state as [`push`](Self::push) of it as
+    /// an `f64` once `sums` is flushed into these statistics
+    /// ([`flush_f32`](Self::flush_f32)).
+    #[inline]
+    pub(crate) fn push_f32(&mut self, x: f32, sums: &mut F32Sums) {
+        let wide = f64::from(x);
+        self.count += 1;
+        self.min = self.min.min(wide);
+        self.max = self.max.max(wide);
+        if !sums.add(x) {
+            self.non_finite = true;
+        }
+    }
+
+    /// Moves the sums of values pushed by [`push_f32`](Self::push_f32) here.
+    pub(crate) fn flush_f32(&mut self, sums: &mut F32Sums) {
+        sums.flush_into(&mut self.sums);
     }
 
     /// Adds the values of `other` (its name is not checked): the same state as pushing
