@@ -595,3 +595,35 @@ proptest! {
         prop_assert_eq!(table, whole);
     }
 }
+
+/// `+0.0` and `-0.0` compare equal, so `f64::min` may keep either: the extremes follow
+/// IEEE 754's total order instead (`-0.0 < +0.0`), and the statistics of rows holding
+/// both zeros are the same bytes in every order of rows and of shards.
+#[test]
+fn signed_zeros_give_the_same_statistics_in_every_order() {
+    let rows = [
+        (Label::Class(0), vec![0.0, -0.0]),
+        (Label::Class(0), vec![-0.0, 0.0]),
+        (Label::Class(1), vec![0.0, 0.0]),
+        (Label::Class(1), vec![-0.0, -0.0]),
+    ];
+    let stats = |order: &[usize]| {
+        let mut s = FitStats::new(&["a", "b"]);
+        for &i in order {
+            s.push(&row(i, &rows[i]));
+        }
+        s
+    };
+    let forward = stats(&[0, 1, 2, 3]).to_bytes();
+    assert_eq!(stats(&[3, 2, 1, 0]).to_bytes(), forward);
+    assert_eq!(stats(&[1, 0, 3, 2]).to_bytes(), forward);
+    let (mut a, b) = (stats(&[1, 3]), stats(&[0, 2]));
+    a.merge(&b).unwrap();
+    assert_eq!(a.to_bytes(), forward);
+    // The recorded extremes are -0.0 and +0.0 (by their bits).
+    let s = stats(&[2, 0, 3, 1]);
+    for m in s.moments() {
+        assert_eq!(m.min().to_bits(), (-0.0f64).to_bits());
+        assert_eq!(m.max().to_bits(), 0.0f64.to_bits());
+    }
+}

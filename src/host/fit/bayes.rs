@@ -14,7 +14,7 @@ use crate::host::BayesSpec;
 use crate::{Axis, EdgeMode, MAX_LAMBDA_BAYES};
 
 use super::shards::FitLogit;
-use super::stats::BinCounter;
+use super::stats::{lower, upper, BinCounter};
 use super::{FitError, MAX_BINS};
 
 /// The hyper-parameters of the Bayes head.
@@ -111,8 +111,8 @@ impl BayesMoments {
                 *n += 1;
             }
             for ((lo, hi), &x) in self.min.iter_mut().zip(&mut self.max).zip(row.logits) {
-                *lo = lo.min(x);
-                *hi = hi.max(x);
+                *lo = lower(*lo, x);
+                *hi = upper(*hi, x);
             }
         }
     }
@@ -126,8 +126,8 @@ impl BayesMoments {
         }
         for ((lo, hi), &v) in self.min.iter_mut().zip(&mut self.max).zip(x) {
             let v = v.to_f64();
-            *lo = lo.min(v);
-            *hi = hi.max(v);
+            *lo = lower(*lo, v);
+            *hi = upper(*hi, v);
         }
     }
 
@@ -144,10 +144,10 @@ impl BayesMoments {
             });
         }
         for (a, &b) in self.min.iter_mut().zip(&other.min) {
-            *a = a.min(b);
+            *a = lower(*a, b);
         }
         for (a, &b) in self.max.iter_mut().zip(&other.max) {
-            *a = a.max(b);
+            *a = upper(*a, b);
         }
         for (a, &b) in self.rows.iter_mut().zip(&other.rows) {
             *a = a.saturating_add(b);

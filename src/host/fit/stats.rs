@@ -19,6 +19,28 @@ pub(crate) struct MomentParts {
     pub(crate) squares: (u32, Vec<i64>),
 }
 
+/// The smaller of two logits in IEEE 754's total order (`-0.0 < +0.0`), so that the
+/// extremes, and the edges and table bytes they give, do not depend on the order in which
+/// rows or shards arrive (`f64::min` may return either zero).
+#[inline]
+pub(crate) fn lower(a: f64, b: f64) -> f64 {
+    if b.total_cmp(&a).is_lt() {
+        b
+    } else {
+        a
+    }
+}
+
+/// The larger of two logits in IEEE 754's total order (see [`lower`]).
+#[inline]
+pub(crate) fn upper(a: f64, b: f64) -> f64 {
+    if b.total_cmp(&a).is_gt() {
+        b
+    } else {
+        a
+    }
+}
+
 /// Count, extremes, mean and variance of one class's training logits `v_c`
 /// (DESIGN §1.1), accumulated one value at a time, and mergeable.
 ///
@@ -74,8 +96,8 @@ impl ClassMoments {
     #[inline]
     pub fn push(&mut self, x: f64) {
         self.count += 1;
-        self.min = self.min.min(x);
-        self.max = self.max.max(x);
+        self.min = lower(self.min, x);
+        self.max = upper(self.max, x);
         match exact::split(x) {
             Some((negative, m, pos)) => self.sums.add(negative, m, pos),
             None => self.non_finite = true,
@@ -89,8 +111,8 @@ impl ClassMoments {
     pub(crate) fn push_f32(&mut self, x: f32, sums: &mut F32Sums) {
         let wide = f64::from(x);
         self.count += 1;
-        self.min = self.min.min(wide);
-        self.max = self.max.max(wide);
+        self.min = lower(self.min, wide);
+        self.max = upper(self.max, wide);
         if !sums.add(x) {
             self.non_finite = true;
         }
@@ -105,8 +127,8 @@ impl ClassMoments {
     /// them one by one.
     pub fn merge(&mut self, other: &Self) {
         self.count = self.count.saturating_add(other.count);
-        self.min = self.min.min(other.min);
-        self.max = self.max.max(other.max);
+        self.min = lower(self.min, other.min);
+        self.max = upper(self.max, other.max);
         self.non_finite |= other.non_finite;
         self.sums.merge(&other.sums);
     }
