@@ -58,10 +58,13 @@ def parse_table(b):
     """The fields of a table file, as floats and ints (no validation)."""
     assert b[:4] == b"MLMP"
     i = 4
-    _version, i = read_varint(b, i)
+    version, i = read_varint(b, i)
     k, i = read_varint(b, i)
     bml, i = read_varint(b, i)
     bmap, i = read_varint(b, i)
+    if version >= 2:  # the Bayes head's bins and categories
+        _bayes_bins, i = read_varint(b, i)
+        _bayes_categories, i = read_varint(b, i)
     edge_mode, upper_tail = b[i], b[i + 1]
     lambda_ml, lambda_map = struct.unpack_from("<ff", b, i + 2)
     i += 10
@@ -86,7 +89,8 @@ def parse_table(b):
         c["map_freqs"] = [f(i + 4 * j) for j in range(nb)]
         i += 4 * nb
         classes.append(c)
-    assert i + 4 == len(b)
+    # Version 2 holds the Bayes head between the classes and the CRC (not needed here).
+    assert i + 4 == len(b) if version == 1 else i + 4 < len(b)
     return classes, lambda_ml, lambda_map, edge_mode, upper_tail
 
 
