@@ -808,15 +808,7 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
     /// Never.
     #[inline]
     pub fn ml(&self, codes: &[Q; K], objectness: f32) -> Result<Scores<K>, InferError> {
-        let (mut out, mut scratch) = ([0.0; K], [0.0; K]);
-        self.view().masses_into(
-            Head::Ml,
-            codes.iter().map(|q| q.value()),
-            objectness,
-            &mut out,
-            &mut scratch,
-        )?;
-        Ok(Scores(out))
+        self.masses(Head::Ml, codes, objectness)
     }
 
     /// MAP scores of one detection: as [`Table::map`](crate::Table::map) (its `Libm`
@@ -831,9 +823,15 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
     /// Never.
     #[inline]
     pub fn map(&self, codes: &[Q; K], objectness: f32) -> Result<Scores<K>, InferError> {
+        self.masses(Head::Map, codes, objectness)
+    }
+
+    /// The ML or MAP scores of one detection from the tabulated masses.
+    #[inline(always)]
+    fn masses(&self, head: Head, codes: &[Q; K], objectness: f32) -> Result<Scores<K>, InferError> {
         let (mut out, mut scratch) = ([0.0; K], [0.0; K]);
         self.view().masses_into(
-            Head::Map,
+            head,
             codes.iter().map(|q| q.value()),
             objectness,
             &mut out,
