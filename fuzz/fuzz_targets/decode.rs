@@ -1,7 +1,8 @@
 //! Any bytes either fail to decode or give a table that satisfies every table invariant
 //! of DESIGN §1.3 (5) and re-encodes to the very same bytes (DESIGN §3).
 //!
-//! Three fixed shapes and the run-time shaped host table are tried, on the input as
+//! Four fixed shapes (one with the shipped table's Bayes head) and the run-time shaped
+//! host table are tried, on the input as
 //! given and on the input with its last four bytes replaced by a valid CRC-32 (without
 //! that, almost every mutation would stop at the checksum).
 #![no_main]
@@ -28,31 +29,42 @@ fn decode_all(bytes: &[u8]) {
             "DynTable re-encodes differently"
         );
     }
-    let shape = dynt
-        .as_ref()
-        .ok()
-        .map(|d| (d.k(), d.bins_ml(), d.bins_map()));
-    decode_as::<3, 22, 17>(bytes, &dynt, shape);
-    decode_as::<2, 4, 3>(bytes, &dynt, shape);
-    decode_as::<2, 1, 1>(bytes, &dynt, shape);
+    let shape = dynt.as_ref().ok().map(|d| {
+        let bayes = d.bayes().map_or((0, 0), |b| (b.bins(), b.categories()));
+        (d.k(), d.bins_ml(), d.bins_map(), bayes.0, bayes.1)
+    });
+    decode_as::<3, 22, 17, 22, 4>(bytes, &dynt, shape);
+    decode_as::<3, 22, 17, 0, 0>(bytes, &dynt, shape);
+    decode_as::<2, 4, 3, 0, 0>(bytes, &dynt, shape);
+    decode_as::<2, 1, 1, 0, 0>(bytes, &dynt, shape);
 }
 
-fn decode_as<const K: usize, const B_ML: usize, const B_MAP: usize>(
+/// The shape of a table: K, ML bins, MAP bins, Bayes bins and categories (0 without
+/// the Bayes head).
+type Shape = (usize, usize, usize, usize, usize);
+
+fn decode_as<
+    const K: usize,
+    const B_ML: usize,
+    const B_MAP: usize,
+    const B_BAYES: usize,
+    const C: usize,
+>(
     bytes: &[u8],
     dynt: &Result<DynTable, DecodeError>,
-    dyn_shape: Option<(usize, usize, usize)>,
+    dyn_shape: Option<Shape>,
 ) {
-    let r = Table::<K, B_ML, B_MAP>::from_bytes(bytes);
+    let r = Table::<K, B_ML, B_MAP, B_BAYES, C>::from_bytes(bytes);
     // Errors are values with a message, never a panic.
     if let Err(e) = &r {
         assert!(!e.to_string().is_empty());
     }
     // Host and device accept exactly the same tables of this shape.
-    let this_shape = dyn_shape == Some((K, B_ML, B_MAP));
+    let this_shape = dyn_shape == Some((K, B_ML, B_MAP, B_BAYES, C));
     assert_eq!(
         r.is_ok(),
         this_shape,
-        "Table<{K},{B_ML},{B_MAP}>: {:?}, DynTable: {:?}",
+        "Table<{K},{B_ML},{B_MAP},{B_BAYES},{C}>: {:?}, DynTable: {:?}",
         r.as_ref().err(),
         dynt.as_ref().err()
     );
