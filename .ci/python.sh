@@ -5,6 +5,8 @@
 # the package with `pip install ./python` as a user would, build the `mlmap` tool (the
 # golden values of the tests), and run pytest on python/tests.
 set -euo pipefail
+# Tools are run as `python -m ...`, so a venv moved with its cache directory still works
+# (its scripts' `#!` lines name the old path).
 
 fail() {
     printf 'python: FAILED: %s\n' "$*" >&2
@@ -24,14 +26,14 @@ echo "cargo fmt --check and clippy of python/ (its own workspace)"
 cargo fmt --manifest-path python/Cargo.toml --check
 cargo clippy --manifest-path python/Cargo.toml --quiet -- -D warnings
 "$venv/bin/python" --version
-"$venv/bin/pip" install -q "maturin>=1.9,<2" -r python/requirements-test.txt
+"$venv/bin/python" -m pip install -q "maturin>=1.9,<2" -r python/requirements-test.txt
 
 echo "pip install ./python"
-"$venv/bin/pip" install -q --force-reinstall --no-deps ./python
+"$venv/bin/python" -m pip install -q --force-reinstall --no-deps ./python
 "$venv/bin/python" -c 'import mlmap; print("mlmap", mlmap.__version__, "from", mlmap.__file__)'
 
 cargo build --release --features cli --bin mlmap --quiet
 # From the repository root, so that `import mlmap` finds the installed package and
 # not the sources in python/mlmap.
-MLMAP_CLI="$PWD/target/release/mlmap" "$venv/bin/pytest" -q -p no:cacheprovider python/tests
+MLMAP_CLI="$PWD/target/release/mlmap" "$venv/bin/python" -m pytest -q -p no:cacheprovider python/tests
 echo "python: passed in $((SECONDS - start)) s"
