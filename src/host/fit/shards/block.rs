@@ -81,89 +81,52 @@ impl FitLogit for f64 {
 /// [`FitCounts::push_rows`]: any primitive integer, `0..K` a class index and `-1`
 /// background, as in `labels.npy` (DESIGN §2).
 pub trait FitLabel: Copy + sealed::Sealed {
-    /// The category of the label among `k` classes: `Some(c)` for a class `c < k`,
-    /// `Some(k)` for background (`-1`), `None` for any other value.
-    fn category(self, k: usize) -> Option<usize>;
-
     /// The value, exactly.
     fn value(self) -> i128;
 
+    /// The category of the label among `k` classes: `Some(c)` for a class `c < k`,
+    /// `Some(k)` for background (`-1`), `None` for any other value.
+    #[inline]
+    fn category(self, k: usize) -> Option<usize> {
+        match self.value() {
+            -1 => Some(k),
+            v => usize::try_from(v).ok().filter(|&c| c < k),
+        }
+    }
+
     /// Whether [`category`](Self::category) is `Some` (without a branch).
     #[doc(hidden)]
-    fn is_valid(self, k: usize) -> bool;
+    #[inline]
+    fn is_valid(self, k: usize) -> bool {
+        // -1 ..= k - 1, shifted to 0 ..= k.
+        (self.value() + 1) as u128 <= k as u128
+    }
 
     /// The category of a valid label (without a branch).
     #[doc(hidden)]
-    fn index(self, k: usize) -> usize;
+    #[inline]
+    fn index(self, k: usize) -> usize {
+        match self.value() {
+            v if v < 0 => k,
+            v => v as usize,
+        }
+    }
 }
 
-macro_rules! signed_labels {
+macro_rules! labels {
     ($($t:ty),*) => {$(
         impl sealed::Sealed for $t {}
 
         impl FitLabel for $t {
             #[inline]
-            fn category(self, k: usize) -> Option<usize> {
-                if self == -1 {
-                    Some(k)
-                } else {
-                    usize::try_from(self).ok().filter(|&c| c < k)
-                }
-            }
-
-            #[inline]
             fn value(self) -> i128 {
                 i128::from(self)
-            }
-
-            #[inline]
-            fn is_valid(self, k: usize) -> bool {
-                // -1 ..= k - 1, shifted to 0 ..= k.
-                (i128::from(self) + 1) as u128 <= k as u128
-            }
-
-            #[inline]
-            fn index(self, k: usize) -> usize {
-                if self < 0 {
-                    k
-                } else {
-                    self as usize
-                }
             }
         }
     )*};
 }
 
-macro_rules! unsigned_labels {
-    ($($t:ty),*) => {$(
-        impl sealed::Sealed for $t {}
-
-        impl FitLabel for $t {
-            #[inline]
-            fn category(self, k: usize) -> Option<usize> {
-                usize::try_from(self).ok().filter(|&c| c < k)
-            }
-
-            #[inline]
-            fn value(self) -> i128 {
-                i128::from(self)
-            }
-
-            #[inline]
-            fn is_valid(self, k: usize) -> bool {
-                u128::from(self) < k as u128
-            }
-
-            #[inline]
-            fn index(self, _k: usize) -> usize {
-                self as usize
-            }
-        }
-    )*};
-}
-
-signed_labels!(i8, i16, i32, i64);
-unsigned_labels!(u8, u16, u32, u64);
+labels!(i8, i16, i32, i64, u8, u16, u32, u64);
 
 /// Checks a block: K logits per label, every label a class index or `-1`.
 fn check_block<T, L: FitLabel>(logits: &[T], labels: &[L], k: usize) -> Result<(), FitError> {
