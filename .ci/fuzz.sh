@@ -22,19 +22,19 @@ if [ -n "${FUZZ_RUNS:-}" ]; then
     runs=(-runs="$FUZZ_RUNS")
 fi
 
-if ! rustup run nightly rustc --version >/dev/null 2>&1; then
-    rustup toolchain install nightly --profile minimal
-fi
+# shellcheck source=.ci/nightly.sh
+source .ci/nightly.sh
+nightly_acquire
 if ! cargo fuzz --version >/dev/null 2>&1; then
     cargo install cargo-fuzz --locked
 fi
 
-cargo +nightly fuzz build --sanitizer "$sanitizer"
+cargo +"$NIGHTLY" fuzz build --sanitizer "$sanitizer"
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
 
-for target in $(cargo +nightly fuzz list); do
+for target in $(cargo +"$NIGHTLY" fuzz list); do
     echo "--- fuzz: $target (${seconds} s)"
     mkdir -p "$scratch/$target"
     seeds="fuzz/corpus/seed_$target"
@@ -42,7 +42,7 @@ for target in $(cargo +nightly fuzz list); do
     if [ -d "$seeds" ]; then
         dirs+=("$seeds")
     fi
-    cargo +nightly fuzz run --sanitizer "$sanitizer" "$target" "${dirs[@]}" -- \
+    cargo +"$NIGHTLY" fuzz run --sanitizer "$sanitizer" "$target" "${dirs[@]}" -- \
         -max_total_time="$seconds" ${runs[@]+"${runs[@]}"} -timeout=10 -rss_limit_mb=2048 \
         -print_final_stats=1
 done

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Proof (c): the library builds for thumbv7em-none-eabihf (Cortex-M4F), without default
 # features and with `micromath,defmt`. The target comes from rustup, or else from Debian's
-# Rust packages with `-Zbuild-std=core`; if neither can be had, the script says SKIPPED
-# loudly and exits 0. Run from the repository root.
+# Rust packages with `-Zbuild-std=core`; if neither can be had, the proof fails
+# (MLMAP_ALLOW_SKIP=1 skips it outside CI). Run from the repository root.
 set -euo pipefail
 
 section() { printf '\n==== thumb: %s ====\n' "$*"; }
