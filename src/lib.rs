@@ -72,9 +72,10 @@ pub use mlmap_core::baseline;
 pub use mlmap_core::{
     argmax, decide, scores_from_evidence, Axis, Backend, BatchError, BayesView, Bounded,
     BoundedTable, ClassName, ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian,
-    GaussianError, Head, Histogram, HistogramError, InferError, Libm, Scores, Settings, Table,
-    TableError, TableView, UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_LAMBDA,
-    MAX_LAMBDA_BAYES, NAME_MAX, VARIANCE_FLOOR,
+    GaussianError, Head, Histogram, HistogramError, InferError, Libm, OpenParams, Scores, Settings,
+    Table, TableError, TableView, UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC,
+    MAX_EPSILON, MAX_LAMBDA, MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX,
+    VARIANCE_FLOOR,
 };
 
 pub mod embedded;

@@ -122,8 +122,8 @@ fn assert_every_byte_corruption_rejected<
 fn every_single_byte_corruption_is_rejected() {
     let n = assert_every_byte_corruption_rejected::<3, 4, 2, 0, 0>(SMALL_MLMAP, 1..=255u8);
     assert_eq!(n, SMALL_MLMAP.len() * 255);
-    // Version 2: the shipped table (every head) and the small Bayes tables.
-    assert_eq!(SHIPPED_MLMAP[4], 2, "the shipped table is a version-2 file");
+    // Version 3: the shipped table (every head, the open head's parameters included).
+    assert_eq!(SHIPPED_MLMAP[4], 3, "the shipped table is a version-3 file");
     let n = assert_every_byte_corruption_rejected::<3, 22, 17, 22, 4>(SHIPPED_MLMAP, 1..=255u8);
     assert_eq!(n, SHIPPED_MLMAP.len() * 255);
     // The small Bayes tables: every bit of every byte, and every byte inverted (all 255
@@ -244,7 +244,11 @@ fn other_versions_are_unsupported() {
     let mut raw = RawTable::small();
     raw.version = 2;
     assert!(Small::from_bytes(&raw.encode()).is_err());
-    for version in [0u64, 3, 127, 300, u64::from(u16::MAX)] {
+    // Version 3 likewise: a Bayes section and the open head's parameters.
+    let mut raw = RawTable::small();
+    raw.version = 3;
+    assert!(Small::from_bytes(&raw.encode()).is_err());
+    for version in [0u64, 4, 127, 300, u64::from(u16::MAX)] {
         let mut raw = RawTable::small();
         raw.version = version;
         assert_eq!(
@@ -1047,7 +1051,8 @@ fn max_encoded_len_bounds_a_worst_case_bayes_head() {
             ranges: vec![(-3.0e30, 3.0e30); 3],
             terms,
         };
-        let bytes = d.with_bayes(spec).unwrap().to_vec().unwrap();
+        let worst = d.with_bayes(spec).unwrap().with_open(1e-6, 1e30).unwrap();
+        let bytes = worst.to_vec().unwrap();
         let max = Table::<3, 22, 17, BB, C>::MAX_ENCODED_LEN;
         assert!(bytes.len() <= max, "{} > {max}", bytes.len());
         // The header's varints and the row counts (9, not 10 bytes) are all the slack.

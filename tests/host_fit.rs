@@ -64,10 +64,10 @@ fn linspace_fit_of_train_csv_equals_the_numpy_reference_byte_for_byte() {
 #[test]
 fn default_fit_with_the_bayes_head_equals_the_numpy_reference_byte_for_byte() {
     // tests/golden/train_bayes.mlmap was written by the independent numpy fit, every
-    // head with the defaults of `mlmap fit` (format version 2):
+    // head with the defaults of `mlmap fit` (format version 3: the untuned open head):
     //   python3 tools/mlmap_ref.py fit examples/data/train.csv tests/golden/train_bayes.mlmap
     let golden = std::fs::read(repo("tests/golden/train_bayes.mlmap")).unwrap();
-    assert_eq!(&golden[4..5], [2], "a version-2 file");
+    assert_eq!(&golden[4..5], [3], "a version-3 file");
     let params = FitParams::default();
     let table = fit(&train(), &params).unwrap();
     assert_eq!(table.to_vec().unwrap(), golden);

@@ -880,7 +880,8 @@ pub(crate) mod bayes {
     use mlmap::host::{BayesSpec, DynTable};
     use mlmap::invariants::{
         bayes_mismatch, bayes_reference, bayes_score_tolerance, bayes_sum, check_dyn_table,
-        check_prior_share, SUBNORMAL_STEP,
+        check_open_decision, check_prior_share, open_mismatch, open_reference,
+        open_score_tolerance, SUBNORMAL_STEP,
     };
     use mlmap::{fast_math_max_score_error, BayesView, FastMath, Libm};
 
@@ -1296,6 +1297,147 @@ pub(crate) mod bayes {
                 }
             }
         )*};
+    }
+
+    /// The open head's parameters: temperatures across the allowed range (1 now and
+    /// then), epsilons 0, tiny, moderate and huge.
+    fn temperature() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            1 => Just(1.0f32),
+            1 => Just(mlmap::MIN_TEMPERATURE),
+            1 => Just(mlmap::MAX_TEMPERATURE),
+            6 => decades(-2.0, 2.0),
+        ]
+    }
+
+    fn epsilon() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            2 => Just(0.0f32),
+            1 => Just(f32::MIN_POSITIVE),
+            1 => Just(mlmap::MAX_EPSILON),
+            6 => decades(-12.0, 6.0),
+        ]
+    }
+
+    /// Scores one detection with the open head on `d` (which must have it) and checks
+    /// DESIGN §1.8: errors for bad inputs; otherwise scores in `[0, OS]` summing to at
+    /// most `OS`, the detector's decision, within `open_score_tolerance` of the `f64`
+    /// formula; the backends agree within the Bayes bound widened by the softmax's.
+    /// Returns the FastMath scores (or the error).
+    fn open_detection(
+        d: &DynTable,
+        x: &[f32],
+        os: f32,
+    ) -> Result<Result<Vec<f32>, InferError>, TestCaseError> {
+        let head = d.bayes().expect("the table has a Bayes head");
+        let params = d.open().expect("the table has the open head");
+        let (k, cats) = (head.logits(), head.categories());
+        let ctx = || format!("x = {x:?}, OS = {os:e}, {params:?}");
+        let mut fast = vec![0.0f32; k];
+        let mut libm = vec![0.0f32; k];
+        let mut scratch = vec![0.0f32; cats];
+        let rf = d.open_into::<FastMath>(x, os, &mut fast, &mut scratch);
+        let rl = d.open_into::<Libm>(x, os, &mut libm, &mut scratch);
+        holds(check_error(x, os, rf.err()), || {
+            format!("FastMath: {}", ctx())
+        })?;
+        holds(check_error(x, os, rl.err()), || format!("Libm: {}", ctx()))?;
+        if let Err(e) = rf {
+            return Ok(Err(e));
+        }
+        let mut want = vec![0.0f64; k];
+        let mut s64 = vec![0.0f64; cats];
+        prop_assert!(open_reference(&head, &params, x, os, &mut want, &mut s64).is_some());
+        for (name, s) in [("FastMath", &fast), ("Libm", &libm)] {
+            holds(check_scores(s, os, Sum::AtMost), || {
+                format!("{name}: {s:?}, {}", ctx())
+            })?;
+            holds(check_open_decision(s, x), || {
+                format!("{name}: {s:?}, {}", ctx())
+            })?;
+            prop_assert!(
+                open_mismatch(&head, &params, x, s, &want, os).is_none(),
+                "{name}: {s:?}, formula {want:?} (relative tolerance {:e}), {}",
+                open_score_tolerance(&head, &params, x),
+                ctx()
+            );
+        }
+        Ok(Ok(fast))
+    }
+
+    proptest! {
+        #[test]
+        fn open_head_holds_every_invariant(
+            (k, bins, background, (b, d), recipe, t, eps, os) in (2usize..=5, 1usize..=8, any::<bool>())
+                .prop_flat_map(|(k, bins, background)| (
+                    Just(k),
+                    Just(bins),
+                    Just(background),
+                    dyn_table(k, bins, background),
+                    prop::collection::vec(blogit(), k),
+                    temperature(),
+                    epsilon(),
+                    objectness(),
+                )),
+        ) {
+            let d = d.with_open(t, eps).expect("parameters in range");
+            holds(check_dyn_table(&d), || format!("{b:?}"))?;
+            // Through the bytes: the same table, written as version 3.
+            let bytes = d.to_vec().unwrap();
+            prop_assert_eq!(u16::from(bytes[4]), mlmap::FORMAT_VERSION);
+            prop_assert_eq!(&DynTable::from_bytes(&bytes).unwrap(), &d);
+            let head = d.bayes().unwrap();
+            prop_assert_eq!((head.logits(), head.bins(), head.has_background()), (k, bins, background));
+            let x = resolve_all(&head, &recipe);
+            prop_assert!(open_detection(&d, &x, os)?.is_ok());
+        }
+
+        /// Raising epsilon never raises a score, with either backend, not even by a
+        /// rounding step; with epsilon 0 and no background the scores are the
+        /// temperature layer's bit for bit (K = 3 here, the layer's const generic).
+        #[test]
+        fn open_head_is_monotone_in_epsilon_and_is_temperature_at_zero(
+            (k, background, (_, d), recipe, t, e1, e2, os) in (2usize..=5, any::<bool>())
+                .prop_flat_map(|(k, background)| (
+                    Just(k),
+                    Just(background),
+                    dyn_table(k, 6, background),
+                    prop::collection::vec(blogit(), k),
+                    temperature(),
+                    epsilon(),
+                    epsilon(),
+                    objectness(),
+                )),
+        ) {
+            let (lo, hi) = if e1 <= e2 { (e1, e2) } else { (e2, e1) };
+            let low = d.clone().with_open(t, lo).unwrap();
+            let high = d.clone().with_open(t, hi).unwrap();
+            let head = d.bayes().unwrap();
+            let x = resolve_all(&head, &recipe);
+            let cats = head.categories();
+            let (mut a, mut b, mut scratch) = (vec![0.0f32; k], vec![0.0f32; k], vec![0.0f32; cats]);
+            for libm in [false, true] {
+                if libm {
+                    low.open_into::<Libm>(&x, os, &mut a, &mut scratch).unwrap();
+                    high.open_into::<Libm>(&x, os, &mut b, &mut scratch).unwrap();
+                } else {
+                    low.open_into::<FastMath>(&x, os, &mut a, &mut scratch).unwrap();
+                    high.open_into::<FastMath>(&x, os, &mut b, &mut scratch).unwrap();
+                }
+                for (i, (&sa, &sb)) in a.iter().zip(&b).enumerate() {
+                    prop_assert!(
+                        sb <= sa,
+                        "class {i}: epsilon {lo:e} gives {sa:e}, epsilon {hi:e} gives {sb:e} (libm: {libm}), x = {x:?}"
+                    );
+                }
+            }
+            if lo == 0.0 && !background && k == 3 {
+                let x3: [f32; 3] = x.clone().try_into().unwrap();
+                let want = mlmap::baseline::temperature::<FastMath, 3>(&x3, t, os).unwrap().0;
+                low.open_into::<FastMath>(&x, os, &mut a, &mut scratch).unwrap();
+                prop_assert_eq!(bits(&a), bits(&want));
+            }
+        }
     }
 
     bayes_properties! {

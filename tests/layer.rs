@@ -1,11 +1,12 @@
 //! The layer against the numpy reference, its error cases, the batch API and the exact
-//! "I don't know" answer (DESIGN §1.2, §1.3, §1.6).
+//! "I don't know" answer (DESIGN §1.2, §1.3, §1.6, §1.8).
 
 use mlmap::{BatchError, InferError, Libm, Scores, Table, UpperTail};
 
 use crate::support::{
     goldens, shipped, small, small_bayes, small_bayes_nobg, small_clamp, small_settings,
-    small_specs, Golden, Shipped, Small, GOLDEN_ABS_TOL, SHIPPED_CSV, SMALL_CSV,
+    small_specs, Golden, Shipped, Small, SmallBayes, SmallBayesNoBg, GOLDEN_ABS_TOL, SHIPPED_CSV,
+    SMALL_CSV,
 };
 
 /// Bayes scores of one detection through the table's view (so that the same code
@@ -1175,4 +1176,127 @@ mod bayes {
         );
         assert_eq!(short, [SENTINEL]);
     }
+}
+
+/// One row of `tests/golden/layer/open.csv`: the open head's expected scores (float64,
+/// from tools/mlmap_ref.py), or its error.
+struct OpenGolden {
+    table: String,
+    case: String,
+    objectness: f32,
+    logits: [f32; 3],
+    scores: Option<[f64; 3]>,
+    error: Option<InferError>,
+}
+
+fn open_goldens() -> Vec<OpenGolden> {
+    let csv = include_str!("golden/layer/open.csv");
+    let mut lines = csv.lines().filter(|l| !l.starts_with('#'));
+    assert_eq!(
+        lines.next(),
+        Some("table,case,objectness,x0,x1,x2,open0,open1,open2,q,error")
+    );
+    lines
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            assert_eq!(f.len(), 11, "golden line {line:?}");
+            let error = match f[10] {
+                "" => None,
+                "objectness" => Some(InferError::Objectness),
+                e => Some(InferError::NanLogit {
+                    class: e.strip_prefix("nan_logit:").unwrap().parse().unwrap(),
+                }),
+            };
+            let x = |i: usize| f[i].parse::<f32>().unwrap();
+            let s = |i: usize| f[i].parse::<f64>().unwrap();
+            OpenGolden {
+                table: f[0].to_owned(),
+                case: f[1].to_owned(),
+                objectness: x(2),
+                logits: [x(3), x(4), x(5)],
+                scores: error.is_none().then(|| [s(6), s(7), s(8)]),
+                error,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn open_head_matches_the_numpy_reference() {
+    let with_bg = SmallBayes::from_bytes(include_bytes!("golden/layer/small_open.mlmap")).unwrap();
+    let no_bg =
+        SmallBayesNoBg::from_bytes(include_bytes!("golden/layer/small_open_nobg.mlmap")).unwrap();
+    let shipped = shipped();
+    let rows = open_goldens();
+    let mut worst = 0.0f64;
+    for g in &rows {
+        let (x, os) = (&g.logits, g.objectness);
+        let got = match g.table.as_str() {
+            "small_open" => with_bg.open(x, os),
+            "small_open_nobg" => no_bg.open(x, os),
+            "default" => shipped.open(x, os),
+            other => panic!("unknown golden table {other}"),
+        };
+        let what = format!("{} {}: x = {x:?}, OS = {os}", g.table, g.case);
+        match (g.scores, g.error) {
+            (None, Some(e)) => assert_eq!(got.err(), Some(e), "{what}"),
+            (Some(want), None) => {
+                let got = got.unwrap_or_else(|e| panic!("{what}: {e:?}")).0;
+                for (i, (&s, &w)) in got.iter().zip(&want).enumerate() {
+                    let err = (f64::from(s) - w).abs();
+                    assert!(
+                        err <= GOLDEN_ABS_TOL,
+                        "{what}: open score {i} {s} vs {w} (error {err:e})"
+                    );
+                    worst = worst.max(err);
+                }
+                // The decision is the detector's: the largest logit, ties to the lower
+                // index (every golden case).
+                let best = (0..3).fold(0, |b, i| if x[i] > x[b] { i } else { b });
+                assert_eq!(mlmap::decide(&got, x), best, "{what}");
+            }
+            _ => unreachable!("a golden row has scores or an error"),
+        }
+        // epsilon = 0 and no background: the temperature layer, bit for bit.
+        if g.table == "small_open_nobg" && g.error.is_none() {
+            let t = no_bg.open_params().unwrap().temperature();
+            let want = mlmap::baseline::temperature::<mlmap::FastMath, 3>(x, t, os).unwrap();
+            assert_eq!(no_bg.open(x, os).unwrap(), want, "{what}");
+        }
+    }
+    for table in ["small_open", "small_open_nobg", "default"] {
+        assert!(
+            rows.iter().filter(|g| g.table == table).count() >= 40,
+            "{table}"
+        );
+    }
+    assert!(rows.iter().any(|g| g.error.is_some()));
+    eprintln!(
+        "open head: {} golden rows, worst score error {worst:e}",
+        rows.len()
+    );
+}
+
+#[cfg(feature = "std")]
+#[test]
+fn tables_without_the_open_head_say_so() {
+    // Version 2: a Bayes head, no open head.
+    assert_eq!(
+        small_bayes().open(&[0.0; 3], 1.0),
+        Err(InferError::NoOpenHead)
+    );
+    assert_eq!(small_bayes().open_params(), None);
+    let d = mlmap::host::DynTable::from_table(&small_bayes());
+    let (mut out, mut scratch) = ([0.0f32; 3], [0.0f32; 4]);
+    assert_eq!(
+        d.open_into::<mlmap::FastMath>(&[0.0; 3], 1.0, &mut out, &mut scratch),
+        Err(InferError::NoOpenHead)
+    );
+    // Version 1: no Bayes head, so none.
+    let d = mlmap::host::DynTable::from_table(&small());
+    assert_eq!(
+        d.open_into::<mlmap::FastMath>(&[0.0; 3], 1.0, &mut out, &mut scratch),
+        Err(InferError::NoOpenHead)
+    );
+    assert!(d.with_open(1.0, 0.0).is_err());
 }

@@ -5,13 +5,14 @@ It shares no code with the Rust crate: it is written from docs/DESIGN.md and doc
 so agreement between the two is evidence for both. Used to write golden values
 (tests/golden/) and to cross-check tables written by `mlmap fit`.
 
-    python3 tools/mlmap_ref.py fit examples/data/train.csv OUT.mlmap   # every head (version 2)
+    python3 tools/mlmap_ref.py fit examples/data/train.csv OUT.mlmap   # every head (version 3)
     python3 tools/mlmap_ref.py fit --no-bayes examples/data/train.csv OUT.mlmap  # version 1
     python3 tools/mlmap_ref.py goldens tests/golden/layer              # layer goldens
 
 `fit` uses the defaults of `mlmap fit`: linspace edges, 22 ML bins (lambda 0.0055), 17 MAP
 bins (lambda 0.00012) and, unless --no-bayes, the Bayes head of docs/DESIGN.md section 1.6 with
-22 bins per logit and lambda 0.001.
+22 bins per logit and lambda 0.001, and the open head's parameters of an untuned table
+(temperature 1, epsilon 0).
 
 The layer half (decode, likelihood, prior, ML, MAP) follows docs/DESIGN.md section 1.2 in
 float64: the table's stored float32 values are widened exactly, the inner bin edges are
@@ -22,7 +23,9 @@ numpy.histogram itself (bins [e_k, e_k+1), the last one closed). The Bayes head
 all labelled rows, its counts come from numpy.histogram on the float32 edges, its log-terms
 are float32(ln(count / n_c + lambda)) computed in float64, and a detection is scored in
 float64 as l[c] = ln pi[c] + sum_j term (ln(lambda) outside axis j), softmax over the
-categories, times the objectness. Goldens were last written with numpy 2.4.6 (the version
+categories, times the objectness. The open head (DESIGN.md section 1.8) is scored in float64
+from the same log-scores plus the unknown category's ln(epsilon) + K ln(1/B + lambda), times a
+softmax of the logits divided by the temperature. Goldens were last written with numpy 2.4.6 (the version
 is also recorded in every golden file).
 """
 import csv
@@ -33,10 +36,14 @@ import zlib
 import numpy as np
 
 MAGIC = b"MLMP"
-# Version 1: ML and MAP heads only; version 2: the same plus a Bayes head.
+# Version 1: ML and MAP heads only; version 2: the same plus a Bayes head; version 3: the
+# same plus the open head's temperature and epsilon.
 VERSION_1 = 1
 VERSION_2 = 2
+VERSION_3 = 3
 VARIANCE_FLOOR = 1e-12
+# The open head's (temperature, epsilon) of a table no validation data has tuned.
+UNTUNED_OPEN = (1.0, 0.0)
 
 
 def varint(n):
@@ -55,20 +62,21 @@ def f32(v):
     return struct.pack("<f", float(np.float32(v)))
 
 
-def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None):
+def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None, open_=None):
     """The bytes of a table file (docs/FORMAT.md).
 
     classes: list of dicts name, rows, mean, var, ml_lo, ml_hi, ml_freqs, map_lo, map_hi,
     map_freqs. bayes: None (a version-1 file) or a dict lambda, rows (per category),
     ranges (K (lo, hi) pairs) and terms (C*K*B log-terms, held category-major here, written
-    logit-major): a version-2
-    file.
+    logit-major): a version-2 file. open_: None, or with a Bayes head a pair
+    (temperature, epsilon): a version-3 file.
     """
     k = len(classes)
     bml = len(classes[0]["ml_freqs"])
     bmap = len(classes[0]["map_freqs"])
     b = bytearray(MAGIC)
-    header = [VERSION_1 if bayes is None else VERSION_2, k, bml, bmap]
+    version = VERSION_1 if bayes is None else (VERSION_2 if open_ is None else VERSION_3)
+    header = [version, k, bml, bmap]
     if bayes is not None:
         cats = len(bayes["rows"])
         header += [len(bayes["terms"]) // (cats * k), cats]
@@ -93,6 +101,8 @@ def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None
         cats, k = len(bayes["rows"]), len(bayes["ranges"])
         lm = np.asarray(bayes["terms"], dtype=np.float32).reshape(cats, k, -1).transpose(1, 2, 0)
         b += varint(lm.size) + b"".join(f32(v) for v in lm.ravel())
+        if open_ is not None:
+            b += f32(open_[0]) + f32(open_[1])
     b += struct.pack("<I", zlib.crc32(bytes(b)) & 0xFFFFFFFF)
     return bytes(b)
 
@@ -220,15 +230,15 @@ def decode(data):
     r = Reader(data[:-4])
     r.take(4)
     version, k, bml, bmap = (r.varint() for _ in range(4))
-    if version not in (VERSION_1, VERSION_2):
+    if version not in (VERSION_1, VERSION_2, VERSION_3):
         raise ValueError("version")
-    if version == VERSION_2:
+    if version >= VERSION_2:
         bins_bayes, cats = r.varint(), r.varint()
         if bins_bayes == 0 or cats == 0:
             raise ValueError("a version-2 header announces an empty Bayes head")
     edge_mode, upper_tail = r.take(1)[0], r.take(1)[0]
     t = dict(k=k, bins_ml=bml, bins_map=bmap, edge_mode=edge_mode, upper_tail=upper_tail,
-             lambda_ml=r.f32(), lambda_map=r.f32(), classes=[], bayes=None)
+             lambda_ml=r.f32(), lambda_map=r.f32(), classes=[], bayes=None, open=None)
     if r.varint() != k:
         raise ValueError("class count")
     for _ in range(k):
@@ -236,7 +246,7 @@ def decode(data):
         c["ml_lo"], c["ml_hi"], c["ml_freqs"] = r.f32(), r.f32(), r.f32s()
         c["map_lo"], c["map_hi"], c["map_freqs"] = r.f32(), r.f32(), r.f32s()
         t["classes"].append(c)
-    if version == VERSION_2:
+    if version >= VERSION_2:
         lam = r.f32()
         rows = [r.varint() for _ in range(r.varint())]
         ranges = [(r.f32(), r.f32()) for _ in range(r.varint())]
@@ -248,6 +258,8 @@ def decode(data):
                      .transpose(2, 0, 1).ravel())
         t["bayes"] = dict(bins=bins_bayes, rows=rows, ranges=ranges, terms=terms,
                           **{"lambda": lam})
+    if version == VERSION_3:
+        t["open"] = (r.f32(), r.f32())
     if r.pos != len(r.data):
         raise ValueError("trailing bytes")
     return t
@@ -321,8 +333,8 @@ def axis_bin(x, lo, hi, nbins):
     return int(np.argmax(counts))
 
 
-def bayes_posterior(t, x):
-    """The posterior p over the Bayes categories (DESIGN.md section 1.6), float64."""
+def bayes_log_scores(t, x):
+    """The log-scores l[c] of the Bayes categories (DESIGN.md section 1.6), float64."""
     b = t["bayes"]
     k, nb = t["k"], b["bins"]
     rows = np.asarray(b["rows"], dtype=np.float64)
@@ -332,8 +344,50 @@ def bayes_posterior(t, x):
     for j, (v, (lo, hi)) in enumerate(zip(x, b["ranges"])):
         i = axis_bin(v, lo, hi, nb)
         l = l + (terms[:, j, i] if i is not None else log_lambda)
+    return l
+
+
+def bayes_posterior(t, x):
+    """The posterior p over the Bayes categories (DESIGN.md section 1.6), float64."""
+    l = bayes_log_scores(t, x)
     e = np.exp(l - l.max())
     return e / e.sum()
+
+
+def temperature_softmax(x, temp):
+    """softmax(x / T) in float64; infinite logits as their limit (equal shares of the
+    largest)."""
+    z = np.asarray(x, dtype=np.float64) / temp
+    m = z.max()
+    if np.isinf(m):
+        top = (z == m).astype(np.float64)
+        return top / top.sum()
+    e = np.exp(z - m)
+    return e / e.sum()
+
+
+def open_known(t, x):
+    """q: the probability that the detection is of a known class (DESIGN.md section 1.8),
+    the K classes' share of the posterior over the categories and the unknown one."""
+    b = t["bayes"]
+    temp, eps = t["open"]
+    k = t["k"]
+    l = bayes_log_scores(t, x)
+    m = l.max()
+    e = np.exp(l - m)
+    if eps == 0.0:
+        unknown = 0.0
+    else:
+        lam = np.float64(b["lambda"])
+        log_u = np.log(np.float64(eps)) + k * np.log(1.0 / b["bins"] + lam)
+        unknown = np.exp(log_u - m)
+    return e[:k].sum() / (e.sum() + unknown)
+
+
+def open_(t, x, os_):
+    """Open-head class scores: OS * q * softmax(x / T)."""
+    check(x, os_)
+    return os_ * open_known(t, x) * temperature_softmax(x, t["open"][0])
 
 
 def bayes(t, x, os_):
@@ -387,6 +441,10 @@ def bayes_head(rows, lam, ranges=SMALL_BAYES_RANGES, freqs=SMALL_BAYES_FREQS):
 # without (car 40, cyclist 20, pedestrian 20).
 SMALL_BAYES = bayes_head([40, 20, 20, 20], 0.01)
 SMALL_BAYES_NOBG = bayes_head([40, 20, 20], 0.001)
+# The open head's (temperature, epsilon) on each: an unknown category of weight 0.05 and a
+# temperature above 1; no unknown and a temperature below 1.
+SMALL_OPEN = (1.75, 0.05)
+SMALL_OPEN_NOBG = (0.8, 0.0)
 
 
 def up(v):
@@ -472,6 +530,17 @@ BAYES_CASES = [
     ("bayes objectness above 1", [3.0, 0.5, -3.5], 1.5),
 ]
 
+# Cases for the open head beyond the Bayes ones: tied and near-tied logits, large logits
+# (the softmax at a temperature), and logits far outside every axis (q from the unknown).
+OPEN_CASES = [
+    ("open tied logits", [0.5, 0.5, -3.5], 1.0),
+    ("open tied logits outside", [50.0, 50.0, 50.0], 0.6),
+    ("open large logits", [30.0, -20.0, 25.0], 1.0),
+    ("open near-tied logits", [1.0, up(1.0), -1.0], 1.0),
+    ("open every logit far outside", [1e6, -1e6, 1e6], 1.0),
+    ("open inside every axis", [1.0, 0.2, -1.5], 0.9),
+]
+
 
 def fmt(v):
     """A float as text that parses back to the same value (f32 inputs stay exact)."""
@@ -510,6 +579,35 @@ def write_csv(path, k, rows, regenerate):
                  "numpy %s.\n" % np.__version__)
         fh.write("# Regenerate: %s\n" % regenerate)
         fh.write("# bayes*: empty for a table without a Bayes head.\n")
+        fh.write("# error: empty, nan_logit:<first NaN class> or objectness.\n")
+        fh.write(",".join(head) + "\n")
+        for r in rows:
+            fh.write(",".join(r) + "\n")
+
+
+def open_rows(name, t, cases):
+    """One CSV row per case for the open head: inputs, scores and q, or the error."""
+    rows = []
+    for case, x, os_ in cases:
+        x = [float(np.float32(v)) for v in x]
+        os_ = float(np.float32(os_))
+        try:
+            scores = list(open_(t, x, os_)) + [open_known(t, x)]
+            err = ""
+        except InferenceError as e:
+            scores, err = [None] * (t["k"] + 1), str(e)
+        rows.append([name, case, fmt(os_)] + [fmt(v) for v in x]
+                    + ["" if v is None else fmt(v) for v in scores] + [err])
+    return rows
+
+
+def write_open_csv(path, k, rows, regenerate):
+    head = ["table", "case", "objectness"] + ["x%d" % i for i in range(k)] \
+        + ["open%d" % i for i in range(k)] + ["q", "error"]
+    with open(path, "w") as fh:
+        fh.write("# Expected open-head scores and q (float64) from tools/mlmap_ref.py, "
+                 "numpy %s.\n" % np.__version__)
+        fh.write("# Regenerate: %s\n" % regenerate)
         fh.write("# error: empty, nan_logit:<first NaN class> or objectness.\n")
         fh.write(",".join(head) + "\n")
         for r in rows:
@@ -573,17 +671,27 @@ def goldens(outdir):
     clamp = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, edge_mode=0, upper_tail=1)
     with_bg = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES)
     no_bg = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES_NOBG)
+    # The open head on both Bayes heads: with background, a temperature and an unknown
+    # category; without, epsilon 0 (then the head is the temperature layer exactly).
+    open_bg = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES,
+                     open_=SMALL_OPEN)
+    open_nobg = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES_NOBG,
+                       open_=SMALL_OPEN_NOBG)
     files = (("small", small), ("small_clamp", clamp), ("small_bayes", with_bg),
-             ("small_bayes_nobg", no_bg))
-    rows = []
+             ("small_bayes_nobg", no_bg), ("small_open", open_bg),
+             ("small_open_nobg", open_nobg))
+    rows, open_table_rows = [], []
     for name, data in files:
         with open(os.path.join(outdir, name + ".mlmap"), "wb") as fh:
             fh.write(data)
         t = decode(data)
         assert encode(t["classes"], t["lambda_ml"], t["lambda_map"], t["edge_mode"],
-                      t["upper_tail"], t["bayes"]) == data
+                      t["upper_tail"], t["bayes"], t["open"]) == data
         cases = SMALL_CASES + (BAYES_CASES if t["bayes"] is not None else [])
-        rows += golden_rows(name, t, cases)
+        if t["open"] is not None:
+            open_table_rows += open_rows(name, t, cases + OPEN_CASES)
+        else:
+            rows += golden_rows(name, t, cases)
     write_csv(os.path.join(outdir, "small.csv"), 3, rows, regen)
     here = os.path.dirname(os.path.abspath(__file__))
     with open(os.path.join(here, "..", "tables", "default.mlmap"), "rb") as fh:
@@ -591,6 +699,9 @@ def goldens(outdir):
     cases = default_cases(t, 300, seed=2) + bayes_cases(t, 200, seed=3)
     rows = golden_rows("default", t, cases)
     write_csv(os.path.join(outdir, "default.csv"), t["k"], rows, regen)
+    if t["open"] is not None:
+        open_table_rows += open_rows("default", t, cases)
+    write_open_csv(os.path.join(outdir, "open.csv"), 3, open_table_rows, regen)
     print("numpy %s: wrote %s" % (np.__version__, outdir))
 
 
@@ -598,8 +709,10 @@ def main():
     args = sys.argv[1:]
     if len(args) in (3, 4) and args[0] == "fit" and args[1:-2] in ([], ["--no-bayes"]):
         classes, lml, lmap, head = fit(args[-2], bayes=len(args) == 3)
+        # An untuned open head (temperature 1, epsilon 0) comes with the Bayes head.
+        open_ = None if head is None else UNTUNED_OPEN
         with open(args[-1], "wb") as fh:
-            fh.write(encode(classes, lml, lmap, bayes=head))
+            fh.write(encode(classes, lml, lmap, bayes=head, open_=open_))
     elif len(args) == 2 and args[0] == "goldens":
         goldens(args[1])
     else:

@@ -1,6 +1,7 @@
 //! The prediction layers mlmap replaces, in `f32` on the device (DESIGN §1.4): the
-//! YOLOv4-style Sigmoid layer and the Softmax layer. They exist so benchmarks and
-//! firmware can compare like with like; host evaluation uses `f64` versions.
+//! YOLOv4-style Sigmoid layer, the Softmax layer and its temperature-scaled form. They
+//! exist so benchmarks and firmware can compare like with like; host evaluation uses
+//! `f64` versions.
 
 use crate::error::InferError;
 use crate::layer::{self, Scores};
@@ -71,6 +72,65 @@ pub fn softmax<M: Backend, const K: usize>(
         *o *= scale;
     }
     Ok(Scores(out))
+}
+
+/// `OS * softmax(x / T)_i`, the temperature-scaled Softmax layer (DESIGN §1.4) with a
+/// temperature `T > 0`: each logit is divided by `T` in `f32`, then the Softmax layer's
+/// computation follows (the maximum subtracted first; infinite logits as in
+/// [`softmax`]). The open head (DESIGN §1.8) ends in exactly this computation.
+///
+/// # Errors
+///
+/// As [`Table::ml`](crate::Table::ml); [`InferError::Evidence`] when `temperature` is
+/// not finite and positive.
+///
+/// # Panics
+///
+/// Never.
+#[inline]
+pub fn temperature<M: Backend, const K: usize>(
+    logits: &[f32; K],
+    temperature: f32,
+    objectness: f32,
+) -> Result<Scores<K>, InferError> {
+    layer::check(logits, objectness, K, K)?;
+    if !(temperature > 0.0 && temperature.is_finite()) {
+        return Err(InferError::Evidence);
+    }
+    let mut out = [0.0; K];
+    temperature_into::<M>(logits, temperature, objectness, &mut out);
+    Ok(Scores(out))
+}
+
+/// [`temperature`] on checked inputs, into `out` (as many entries as `logits`).
+#[inline(always)]
+pub(crate) fn temperature_into<M: Backend>(
+    logits: &[f32],
+    temperature: f32,
+    objectness: f32,
+    out: &mut [f32],
+) {
+    for (o, &x) in out.iter_mut().zip(logits) {
+        *o = x / temperature;
+    }
+    let max = out.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    if max.is_infinite() {
+        // All -inf, or some +inf: the limit puts equal mass on the largest entries.
+        let n = out.iter().filter(|&&x| x == max).count() as f32;
+        for o in out.iter_mut() {
+            *o = if *o == max { objectness / n } else { 0.0 };
+        }
+        return;
+    }
+    let mut sum = 0.0;
+    for o in out.iter_mut() {
+        *o = M::exp(*o - max);
+        sum += *o;
+    }
+    let scale = objectness / sum;
+    for o in out.iter_mut() {
+        *o *= scale;
+    }
 }
 
 #[cfg(test)]

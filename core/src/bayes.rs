@@ -28,6 +28,7 @@
 use crate::error::{Head, InferError, TableError};
 use crate::histogram::{Axis, FREQUENCY_SUM_TOLERANCE};
 use crate::math::{self, Backend};
+use crate::open::OpenParams;
 
 /// The Bayes head of a table, borrowed from its storage.
 ///
@@ -42,9 +43,17 @@ pub struct BayesView<'a> {
     pub(crate) log_prior: &'a [f32],
     pub(crate) lambda: f32,
     pub(crate) log_lambda: f32,
+    /// The open head's parameters (§1.8), when the table has them (format version 3).
+    pub(crate) open: Option<OpenParams>,
 }
 
 impl<'a> BayesView<'a> {
+    /// The open head's parameters (DESIGN §1.8), when the table has that head.
+    #[inline]
+    pub fn open(&self) -> Option<OpenParams> {
+        self.open
+    }
+
     /// Number of logits (the table's K).
     #[inline]
     pub fn logits(&self) -> usize {
@@ -131,17 +140,28 @@ impl<'a> BayesView<'a> {
         out: &mut [f32],
         scratch: &mut [f32],
     ) -> Result<(), InferError> {
-        let k = self.logits();
+        if out.len() != self.logits() {
+            return Err(InferError::Length);
+        }
+        self.log_scores_into(logits, scratch)?;
+        softmax::<M>(scratch, objectness, out);
+        Ok(())
+    }
+
+    /// The log-scores `l[c] = ln pi[c] + sum_j t[c][j][bin_j(x_j)]` of one detection
+    /// into `l` (one per category); shared by this head and the open head (§1.8).
+    #[inline]
+    pub(crate) fn log_scores_into(&self, logits: &[f32], l: &mut [f32]) -> Result<(), InferError> {
         let b = self.bins();
-        if logits.len() != k || out.len() != k || scratch.len() != self.categories() {
+        if logits.len() != self.logits() || l.len() != self.categories() {
             return Err(InferError::Length);
         }
         // Each logit's bin is looked up once, and its row of C terms added to the
         // log-scores (left to right over the logits, after the prior).
-        for (l, &prior) in scratch.iter_mut().zip(self.log_prior) {
+        for (l, &prior) in l.iter_mut().zip(self.log_prior) {
             *l = prior;
         }
-        let cats = scratch.len();
+        let cats = l.len();
         let mut offset = 0usize;
         for (axis, &x) in self.axes.iter().zip(logits) {
             let row = axis.bin(x).and_then(|bin| {
@@ -150,19 +170,18 @@ impl<'a> BayesView<'a> {
             });
             match row {
                 Some(row) => {
-                    for (l, &t) in scratch.iter_mut().zip(row) {
+                    for (l, &t) in l.iter_mut().zip(row) {
                         *l += t;
                     }
                 }
                 None => {
-                    for l in scratch.iter_mut() {
+                    for l in l.iter_mut() {
                         *l += self.log_lambda;
                     }
                 }
             }
             offset += b;
         }
-        softmax::<M>(scratch, objectness, out);
         Ok(())
     }
 }

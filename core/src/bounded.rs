@@ -13,6 +13,7 @@ use crate::error::{DecodeError, TableError};
 use crate::gaussian::Gaussian;
 use crate::histogram::{Axis, Histogram};
 use crate::name::ClassName;
+use crate::open::OpenParams;
 use crate::view::{BayesStorage, Slots, TableView};
 use crate::wire::{self, Settings};
 
@@ -164,6 +165,7 @@ pub struct BoundedTable<
     bayes_log_prior: [f32; C],
     bayes_lambda: f32,
     bayes_log_lambda: f32,
+    bayes_open: Option<OpenParams>,
 }
 
 impl<
@@ -229,6 +231,7 @@ impl<
             bayes_log_prior: [0.0; C],
             bayes_lambda: 0.0,
             bayes_log_lambda: 0.0,
+            bayes_open: None,
         }
     }
 
@@ -306,6 +309,7 @@ impl<
                 log_prior: self.bayes_log_prior.get(..c)?,
                 lambda: self.bayes_lambda,
                 log_lambda: self.bayes_log_lambda,
+                open: self.bayes_open,
             })
         } else {
             None
@@ -392,6 +396,7 @@ impl<
                         .ok_or(malformed)?,
                     lambda: &mut self.bayes_lambda,
                     log_lambda: &mut self.bayes_log_lambda,
+                    open: &mut self.bayes_open,
                 })
             } else {
                 None

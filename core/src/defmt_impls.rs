@@ -14,6 +14,7 @@ impl Format for Head {
             Self::Ml => write!(f, "ML"),
             Self::Map => write!(f, "MAP"),
             Self::Bayes => write!(f, "Bayes"),
+            Self::Open => write!(f, "open"),
         }
     }
 }
@@ -38,6 +39,8 @@ impl Format for TableError {
             Self::ClassCount => write!(f, "class count out of range"),
             Self::CategoryRows { class } => write!(f, "Bayes category {} has no rows", class),
             Self::BayesShape => write!(f, "Bayes head shape inconsistent"),
+            Self::Temperature => write!(f, "open head: temperature out of range"),
+            Self::Epsilon => write!(f, "open head: epsilon out of range"),
         }
     }
 }
@@ -79,6 +82,7 @@ impl Format for InferError {
             Self::Length => write!(f, "Length"),
             Self::Evidence => write!(f, "Evidence"),
             Self::NoBayesHead => write!(f, "NoBayesHead"),
+            Self::NoOpenHead => write!(f, "NoOpenHead"),
             Self::CodeRange { class } => write!(f, "CodeRange({})", class),
         }
     }

@@ -12,6 +12,7 @@ use crate::gaussian::Gaussian;
 use crate::histogram::{Axis, Histogram};
 use crate::math::Backend;
 use crate::name::ClassName;
+use crate::open::OpenParams;
 use crate::view::{self, BayesStorage, Slots, TableView};
 use crate::wire::{self, ClassSpec, Settings};
 
@@ -40,6 +41,7 @@ struct DynBayes {
     log_prior: Vec<f32>,
     lambda: f32,
     log_lambda: f32,
+    open: Option<OpenParams>,
 }
 
 /// A fitted Bayes head before validation (docs/DESIGN.md §1.6), for
@@ -136,6 +138,7 @@ impl DynTable {
             log_prior,
             lambda: spec.lambda,
             log_lambda,
+            open: None,
         });
         Ok(self)
     }
@@ -143,6 +146,31 @@ impl DynTable {
     /// The table without its Bayes head.
     pub fn without_bayes(mut self) -> Self {
         self.bayes = None;
+        self
+    }
+
+    /// The table with the open head (DESIGN §1.8): its temperature `T` and the prior
+    /// weight `epsilon` of the unknown category. The table is then written as format
+    /// version 3.
+    ///
+    /// # Errors
+    ///
+    /// [`TableError::BayesShape`] for a table without a Bayes head (the open head is
+    /// built on it); [`TableError::Temperature`] or [`TableError::Epsilon`] for a
+    /// parameter out of range.
+    pub fn with_open(mut self, temperature: f32, epsilon: f32) -> Result<Self, TableError> {
+        let k = self.k();
+        let b = self.bayes.as_mut().ok_or(TableError::BayesShape)?;
+        let bins = b.axes.first().map_or(0, Axis::bins);
+        b.open = Some(OpenParams::new(temperature, epsilon, k, bins, b.lambda)?);
+        Ok(self)
+    }
+
+    /// The table without its open head (a version-2 table if it has a Bayes head).
+    pub fn without_open(mut self) -> Self {
+        if let Some(b) = self.bayes.as_mut() {
+            b.open = None;
+        }
         self
     }
 
@@ -189,6 +217,7 @@ impl DynTable {
                 log_prior: vec![0.0; categories],
                 lambda: 0.0,
                 log_lambda: 0.0,
+                open: None,
             }),
         };
         let mut raw_names = vec![""; k];
@@ -209,6 +238,7 @@ impl DynTable {
                 log_prior: &mut b.log_prior,
                 lambda: &mut b.lambda,
                 log_lambda: &mut b.log_lambda,
+                open: &mut b.open,
             }),
         }
         .decode(&header, body)?;
@@ -235,6 +265,7 @@ impl DynTable {
                 log_prior: &b.log_prior,
                 lambda: b.lambda,
                 log_lambda: b.log_lambda,
+                open: b.open,
             }),
             settings: &self.settings,
         }
@@ -309,6 +340,11 @@ impl DynTable {
         self.view().bayes()
     }
 
+    /// The open head's parameters, if the table has that head.
+    pub fn open(&self) -> Option<OpenParams> {
+        self.view().open()
+    }
+
     /// ML scores of one detection into `out` (length K); `scratch` is any K floats.
     ///
     /// # Errors
@@ -359,6 +395,24 @@ impl DynTable {
             .bayes_into::<M>(logits, objectness, out, scratch)
     }
 
+    /// Open-head scores of one detection with backend `M` into `out` (length K);
+    /// `scratch` holds one float per Bayes category. `M = FastMath` gives the bits of
+    /// [`Table::open`](crate::Table::open).
+    ///
+    /// # Errors
+    ///
+    /// [`InferError::NoOpenHead`] without that head; otherwise as
+    /// [`DynTable::ml_into`].
+    pub fn open_into<M: Backend>(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        self.view().open_into::<M>(logits, objectness, out, scratch)
+    }
+
     /// The run-time shaped copy of a fixed-size table.
     pub fn from_table<
         const K: usize,
@@ -384,6 +438,7 @@ impl DynTable {
                 log_prior: b.log_prior.to_vec(),
                 lambda: b.lambda,
                 log_lambda: b.log_lambda,
+                open: b.open,
             }),
         }
     }

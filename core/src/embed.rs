@@ -4,7 +4,7 @@
 
 use crate::histogram::{Axis, Histogram};
 use crate::qtable::{Code, Meta, QClass, QLogit, QTable};
-use crate::{ClassName, Gaussian, Settings, Table};
+use crate::{ClassName, Gaussian, OpenParams, Settings, Table};
 
 /// A histogram from validated fields.
 pub const fn histogram<F>(lo: f32, hi: f32, width: f32, inv_width: f32, freqs: F) -> Histogram<F> {
@@ -65,6 +65,7 @@ pub const fn table<
     bayes_log_prior: [f32; C],
     bayes_lambda: f32,
     bayes_log_lambda: f32,
+    bayes_open: Option<OpenParams>,
 ) -> Table<K, B_ML, B_MAP, B_BAYES, C> {
     Table {
         names,
@@ -79,7 +80,17 @@ pub const fn table<
         bayes_log_prior,
         bayes_lambda,
         bayes_log_lambda,
+        bayes_open,
     }
+}
+
+/// The open head's parameters as validated by the build script.
+pub const fn open(temperature: f32, epsilon: f32, log_unknown: f32) -> Option<OpenParams> {
+    Some(OpenParams {
+        temperature,
+        epsilon,
+        log_unknown,
+    })
 }
 
 /// `len` bytes of `bytes` from `at`: a part of an embedded quantized section (a

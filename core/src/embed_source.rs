@@ -101,6 +101,15 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
         UpperTail::Zero => "Zero",
         UpperTail::Clamp => "Clamp",
     };
+    let open = match v.open() {
+        Some(o) => format!(
+            "E::open({}, {}, {})",
+            f(o.temperature()),
+            f(o.epsilon()),
+            f(o.log_unknown())
+        ),
+        None => "None".into(),
+    };
     let (axes, terms, brows, log_prior, lambda, log_lambda) = match bayes {
         Some(b) => {
             let axes: Vec<String> = b
@@ -149,7 +158,7 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
         "/// The validated table, ready to score: no decoding at start-up.\n\
          pub static TABLE: EmbeddedTable = E::table(\n    [{}],\n    {:?},\n    [{}],\n    [{}],\n    [{}],\n    \
          {krate}::Settings {{ lambda_ml: {}, lambda_map: {}, edge_mode: {krate}::EdgeMode::{edge}, \
-         upper_tail: {krate}::UpperTail::{tail} }},\n    {axes},\n    {terms},\n    {brows},\n    {log_prior},\n    {lambda},\n    {log_lambda},\n);",
+         upper_tail: {krate}::UpperTail::{tail} }},\n    {axes},\n    {terms},\n    {brows},\n    {log_prior},\n    {lambda},\n    {log_lambda},\n    {open},\n);",
         names.join(", "),
         v.rows,
         priors.join(", "),

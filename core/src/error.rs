@@ -15,6 +15,9 @@ pub enum Head {
     Map,
     /// The Bayes head (a posterior over every logit, docs/DESIGN.md §1.6).
     Bayes,
+    /// The open head (the detector's softmax at a temperature, times the probability
+    /// that the object is of a known class, docs/DESIGN.md §1.8).
+    Open,
 }
 
 impl fmt::Display for Head {
@@ -23,6 +26,7 @@ impl fmt::Display for Head {
             Self::Ml => "ML",
             Self::Map => "MAP",
             Self::Bayes => "Bayes",
+            Self::Open => "open",
         })
     }
 }
@@ -95,6 +99,12 @@ pub enum TableError {
     /// The Bayes head's shape is inconsistent: categories other than K or K + 1, or
     /// a stored sequence of the wrong length.
     BayesShape,
+    /// The open head's temperature is not in
+    /// `[MIN_TEMPERATURE, MAX_TEMPERATURE]` (DESIGN §1.8).
+    Temperature,
+    /// The open head's `epsilon` is not 0 and not in
+    /// `[f32::MIN_POSITIVE, MAX_EPSILON]` (DESIGN §1.8).
+    Epsilon,
 }
 
 impl fmt::Display for TableError {
@@ -121,7 +131,7 @@ impl fmt::Display for TableError {
                 f,
                 "{head} lambda is not in (0, {}]",
                 match head {
-                    Head::Bayes => crate::MAX_LAMBDA_BAYES,
+                    Head::Bayes | Head::Open => crate::MAX_LAMBDA_BAYES,
                     Head::Ml | Head::Map => crate::MAX_LAMBDA,
                 }
             ),
@@ -140,6 +150,18 @@ impl fmt::Display for TableError {
             ),
             Self::BayesShape => f.write_str(
                 "Bayes head: categories are not K or K + 1, or a sequence has the wrong length"
+            ),
+            Self::Temperature => write!(
+                f,
+                "open head: the temperature is not in [{:e}, {:e}]",
+                crate::MIN_TEMPERATURE,
+                crate::MAX_TEMPERATURE
+            ),
+            Self::Epsilon => write!(
+                f,
+                "open head: epsilon is neither 0 nor in [{:e}, {:e}]",
+                f32::MIN_POSITIVE,
+                crate::MAX_EPSILON
             ),
         }
     }
@@ -263,6 +285,9 @@ pub enum InferError {
     /// The Bayes head was asked for, and the table has none (it was fitted with
     /// `--no-bayes`, or is a version-1 table).
     NoBayesHead,
+    /// The open head was asked for, and the table has none (it has no Bayes head, or is
+    /// a version-1 or version-2 table).
+    NoOpenHead,
     /// A quantized logit is outside the code range of the quantized table (an int8
     /// section given a code above 127 or below -128).
     CodeRange {
@@ -281,6 +306,7 @@ impl fmt::Display for InferError {
                 f.write_str("evidence is not finite and >= 0, or lambda is out of range")
             }
             Self::NoBayesHead => f.write_str("the table has no Bayes head"),
+            Self::NoOpenHead => f.write_str("the table has no open head"),
             Self::CodeRange { class } => write!(
                 f,
                 "quantized logit of class {class} is outside the section's code range"

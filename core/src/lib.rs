@@ -43,8 +43,8 @@ pub mod __embed_source {
 pub mod __embed {
     //! `const` constructors for build-script output; not part of the API.
     pub use crate::embed::{
-        axis, class_name, gaussian, histogram, part, part4, qclass, qlogit, qmeta, qtable, table,
-        QLOGIT_NONE,
+        axis, class_name, gaussian, histogram, open, part, part4, qclass, qlogit, qmeta, qtable,
+        table, QLOGIT_NONE,
     };
 }
 mod embed;
@@ -57,6 +57,7 @@ mod histogram;
 mod layer;
 mod math;
 mod name;
+mod open;
 mod qtable;
 mod qtable_build;
 #[cfg(feature = "alloc")]
@@ -75,6 +76,7 @@ pub use histogram::{
 pub use layer::{argmax, decide, scores_from_evidence, Scores};
 pub use math::{Backend, Libm};
 pub use name::{ClassName, NAME_MAX};
+pub use open::{OpenParams, MAX_EPSILON, MAX_TEMPERATURE, MIN_TEMPERATURE};
 pub use qtable::{
     code_range, dequantize, Code, QField, QTable, QTableError, MAX_LOG_TERM, MAX_MASS,
     QUANTIZED_MAGIC, QUANTIZED_VERSION,

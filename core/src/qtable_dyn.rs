@@ -168,6 +168,7 @@ impl<'a> DynQTable<'a> {
                 let mut scratch = alloc::vec![0.0f32; usize::from(self.meta.categories)];
                 view.bayes_into::<BayesBackend>(codes, objectness, out, &mut scratch)
             }
+            Head::Open => Err(InferError::NoOpenHead),
         }
     }
 }

@@ -9,7 +9,8 @@ use crate::histogram::{Axis, Histogram};
 use crate::layer::Scores;
 use crate::math::Backend;
 use crate::name::ClassName;
-use crate::view::{self, BayesBackend, BayesStorage, MapBackend, Slots, TableView};
+use crate::open::OpenParams;
+use crate::view::{self, BayesBackend, BayesStorage, MapBackend, OpenBackend, Slots, TableView};
 use crate::wire::{self, ClassSpec, Settings};
 
 /// A fitted table for `K` classes: `B_ML` bins in the ML head's histograms, `B_MAP` in
@@ -76,6 +77,8 @@ pub struct Table<
     pub(crate) bayes_log_prior: [f32; C],
     pub(crate) bayes_lambda: f32,
     pub(crate) bayes_log_lambda: f32,
+    /// The open head's parameters (DESIGN §1.8), `None` without that head.
+    pub(crate) bayes_open: Option<OpenParams>,
 }
 
 impl<
@@ -126,6 +129,7 @@ impl<
                 log_prior: &self.bayes_log_prior,
                 lambda: self.bayes_lambda,
                 log_lambda: self.bayes_log_lambda,
+                open: self.bayes_open,
             }),
             settings: &self.settings,
         }
@@ -240,6 +244,7 @@ impl<
                 log_prior: &mut table.bayes_log_prior,
                 lambda: &mut table.bayes_lambda,
                 log_lambda: &mut table.bayes_log_lambda,
+                open: &mut table.bayes_open,
             }),
         }
         .decode(&header, body)?;
@@ -295,6 +300,7 @@ impl<
             bayes_log_prior: [0.0; C],
             bayes_lambda: 0.0,
             bayes_log_lambda: 0.0,
+            bayes_open: None,
         }
     }
 
@@ -404,6 +410,60 @@ impl<
         Ok(Scores(out))
     }
 
+    /// Open-head scores of one detection (docs/DESIGN.md §1.8): `OS * q * softmax(z / T)_i`,
+    /// with `q` the probability that the detection is an object of a known class. The
+    /// decision among the classes is the detector's own (the largest logit), so the head
+    /// keeps its ranking and lowers only what looks unlike anything known. Only for a
+    /// table type with a Bayes head (a compile-time error otherwise); a table without the
+    /// open head's parameters (format versions 1 and 2) answers
+    /// [`InferError::NoOpenHead`]. Uses [`FastMath`](crate::FastMath) as the Bayes head
+    /// does; [`Table::open_with`] takes another backend.
+    ///
+    /// # Errors
+    ///
+    /// [`InferError::NoOpenHead`]; otherwise as [`Table::ml`].
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    #[inline]
+    pub fn open(&self, logits: &[f32; K], objectness: f32) -> Result<Scores<K>, InferError> {
+        self.open_with::<OpenBackend>(logits, objectness)
+    }
+
+    /// Open-head scores of one detection with the maths backend `M`.
+    ///
+    /// # Errors
+    ///
+    /// As [`Table::open`].
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    #[inline]
+    pub fn open_with<M: Backend>(
+        &self,
+        logits: &[f32; K],
+        objectness: f32,
+    ) -> Result<Scores<K>, InferError> {
+        const {
+            assert!(
+                B_BAYES > 0,
+                "this table type has no Bayes head (B_BAYES = 0), so no open head"
+            )
+        };
+        let mut out = [0.0; K];
+        let mut scratch = [0.0; C];
+        self.view()
+            .open_into::<M>(logits, objectness, &mut out, &mut scratch)?;
+        Ok(Scores(out))
+    }
+
+    /// The open head's parameters, when the table has that head.
+    pub fn open_params(&self) -> Option<OpenParams> {
+        self.bayes_open
+    }
+
     /// ML scores of a batch: row `r` of `logits` and `objectness` (1.0 for every row when
     /// `None`) into row `r` of `out`.
     ///
@@ -478,6 +538,24 @@ impl<
         out: &mut [[f32; K]],
     ) -> Result<(), BatchError> {
         batch(logits, objectness, out, |x, os| self.bayes(x, os))
+    }
+
+    /// Open-head scores of a batch, as [`Table::ml_batch`].
+    ///
+    /// # Errors
+    ///
+    /// As [`Table::ml_batch`].
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    pub fn open_batch(
+        &self,
+        logits: &[[f32; K]],
+        objectness: Option<&[f32]>,
+        out: &mut [[f32; K]],
+    ) -> Result<(), BatchError> {
+        batch(logits, objectness, out, |x, os| self.open(x, os))
     }
 
     /// Name of class `i`.

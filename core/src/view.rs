@@ -11,6 +11,7 @@ use crate::histogram::{Axis, Histogram};
 use crate::layer;
 use crate::math::Backend;
 use crate::name::ClassName;
+use crate::open::{self, OpenParams};
 use crate::wire::{self, BayesSlots, ClassFields, ClassSpec, Header, Settings};
 
 /// A validated table borrowed from its storage: `F` and `G` hold the ML and MAP
@@ -172,7 +173,38 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
         layer::check(logits, objectness, self.k(), out.len())?;
         bayes.score_into::<M>(logits, objectness, out, scratch)
     }
+
+    /// The open head's parameters (DESIGN §1.8), when the table has that head.
+    #[inline]
+    pub fn open(&self) -> Option<OpenParams> {
+        self.bayes.and_then(|b| b.open)
+    }
+
+    /// Open-head scores of one detection with backend `M` into `out` (K entries);
+    /// `scratch` holds one float per Bayes category (K or K + 1).
+    ///
+    /// # Errors
+    ///
+    /// [`InferError::NoOpenHead`] for a table without that head; otherwise as
+    /// [`TableView::ml_into`].
+    #[inline]
+    pub fn open_into<M: Backend>(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
+        let bayes = self.bayes.as_ref().ok_or(InferError::NoOpenHead)?;
+        let params = bayes.open.as_ref().ok_or(InferError::NoOpenHead)?;
+        layer::check(logits, objectness, self.k(), out.len())?;
+        open::score_into::<M>(bayes, params, logits, objectness, out, scratch)
+    }
 }
+
+/// The backend of the open head's `exp` when none is named (`Table::open`): the Bayes
+/// head's, whose log-scores it shares.
+pub(crate) type OpenBackend = crate::FastMath;
 
 /// The backend of the MAP head's `exp` when none is named (`Table::map`).
 pub(crate) type MapBackend = crate::math::Libm;
@@ -200,13 +232,14 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'_, F, G> {
     ) -> Result<(), InferError> {
         let need = match head {
             Head::Ml | Head::Map => self.k(),
-            Head::Bayes => self.bayes.map_or(0, |b| b.categories()),
+            Head::Bayes | Head::Open => self.bayes.map_or(0, |b| b.categories()),
         };
         let scratch = scratch.get_mut(..need).ok_or(InferError::Length)?;
         match head {
             Head::Ml => self.ml_into(logits, objectness, out, scratch),
             Head::Map => self.map_into::<MapBackend>(logits, objectness, out, scratch),
             Head::Bayes => self.bayes_into::<BayesBackend>(logits, objectness, out, scratch),
+            Head::Open => self.open_into::<OpenBackend>(logits, objectness, out, scratch),
         }
     }
 }
@@ -236,6 +269,8 @@ pub(crate) struct BayesStorage<'t> {
     pub(crate) log_prior: &'t mut [f32],
     pub(crate) lambda: &'t mut f32,
     pub(crate) log_lambda: &'t mut f32,
+    /// The open head's parameters; `None` for a version-2 table.
+    pub(crate) open: &'t mut Option<OpenParams>,
 }
 
 impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> wire::BodySink<'a>
@@ -249,7 +284,7 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> wire::B
         match head {
             Head::Ml => self.ml.get_mut(class).map(|h| h.freqs.as_mut()),
             Head::Map => self.map.get_mut(class).map(|h| h.freqs.as_mut()),
-            Head::Bayes => None,
+            Head::Bayes | Head::Open => None,
         }
         .unwrap_or_default()
     }
@@ -296,7 +331,7 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
         if has_bayes != self.bayes.is_some() {
             return Err(DecodeError::Malformed);
         }
-        let parsed = wire::parse_body_into(body, has_bayes, &mut self)?;
+        let parsed = wire::parse_body_into(body, has_bayes, header.open, &mut self)?;
         let k = self.names.len();
         if parsed.classes != k || usize::from(header.k) != k {
             return Err(DecodeError::Malformed);
@@ -331,6 +366,10 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
             }
             *b.lambda = lambda;
             *b.log_lambda = bayes::validate(k, bins, lambda, b.axes, b.terms, b.rows, b.log_prior)?;
+            *b.open = match parsed.open {
+                Some((t, e)) => Some(OpenParams::new(t, e, k, bins, lambda)?),
+                None => None,
+            };
         }
         Ok(())
     }

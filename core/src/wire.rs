@@ -1,4 +1,4 @@
-//! The `.mlmap` wire format, versions 1 and 2 (`docs/FORMAT.md` is the normative
+//! The `.mlmap` wire format, versions 1 to 3 (`docs/FORMAT.md` is the normative
 //! description).
 //!
 //! A table is one postcard message followed by a CRC-32:
@@ -13,11 +13,13 @@
 //! Bayes    version 2 only: lambda (f32 LE), rows per category (varint C + C varint
 //!          u64), per logit its lo and hi (varint K + K pairs of f32 LE), the log-terms
 //!          (varint K*B*C + K*B*C f32 LE, logit-major: logit, then bin, then category)
+//! Open     version 3 only: temperature, epsilon (f32 LE each)
 //! CRC      CRC-32/ISO-HDLC (zlib's crc32) of every byte before it, 4 bytes LE
 //! ```
 //!
-//! A table without a Bayes head is written as version 1, a table with one as version 2:
-//! each table has exactly one encoding.
+//! A table without a Bayes head is written as version 1, a table with one as version 2,
+//! a table with a Bayes head and the open head's parameters as version 3: each table has
+//! exactly one encoding.
 //!
 //! This module is shared by the layer, the host table and `build.rs`; it depends on
 //! nothing but `core`, serde and postcard, and never allocates: the class sequence type
@@ -40,12 +42,15 @@ pub(crate) use parse::{parse_body_into, BayesSlots, BodySink, ClassFields};
 /// The four bytes every table starts with.
 pub const MAGIC: [u8; 4] = *b"MLMP";
 
-/// The newest format version: this build writes it for tables with a Bayes head, and
-/// reads it and every older version (a version-1 table has no Bayes head).
-pub const FORMAT_VERSION: u16 = 2;
+/// The newest format version: this build writes it for tables with the open head
+/// (DESIGN §1.8), and reads it and every older version (a version-1 table has no Bayes
+/// head, a version-2 table no open head).
+pub const FORMAT_VERSION: u16 = 3;
 
 /// The version of tables without a Bayes head.
 const VERSION_1: u16 = 1;
+/// The version of tables with a Bayes head and no open head.
+const VERSION_2: u16 = 2;
 
 /// Largest smoothing lambda a table may hold. Frequencies are at most 1 and priors at
 /// most about `4e18`, so with `lambda <= 1e6` no sum of K terms can overflow `f32`.
@@ -189,6 +194,8 @@ pub(crate) struct Header {
     pub(crate) bins_bayes: u16,
     /// 0 when the table has no Bayes head (version 1).
     pub(crate) categories: u16,
+    /// Whether the open head's parameters follow the Bayes section (version 3).
+    pub(crate) open: bool,
 }
 
 impl Header {
@@ -311,7 +318,7 @@ pub(crate) fn open(bytes: &[u8]) -> Result<(Header, &[u8]), DecodeError> {
     let malformed = |_| DecodeError::Malformed;
     let ((_magic, version), rest) =
         postcard::take_from_bytes::<([u8; 4], u16)>(payload).map_err(malformed)?;
-    if version != VERSION_1 && version != FORMAT_VERSION {
+    if !(VERSION_1..=FORMAT_VERSION).contains(&version) {
         return Err(DecodeError::UnsupportedVersion { found: version });
     }
     let ((k, bins_ml, bins_map), mut body) =
@@ -323,11 +330,12 @@ pub(crate) fn open(bytes: &[u8]) -> Result<(Header, &[u8]), DecodeError> {
         bins_map,
         bins_bayes: 0,
         categories: 0,
+        open: version == FORMAT_VERSION,
     };
-    if version == FORMAT_VERSION {
+    if version >= VERSION_2 {
         let ((bins, categories), rest) =
             postcard::take_from_bytes::<(u16, u16)>(body).map_err(malformed)?;
-        // Version 2 is only ever written for a table with a Bayes head.
+        // Versions 2 and 3 are only ever written for a table with a Bayes head.
         if bins == 0 || categories == 0 {
             return Err(DecodeError::Malformed);
         }
@@ -368,13 +376,14 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
         let view = self.0;
         let narrow = |n: usize| u16::try_from(n).unwrap_or(u16::MAX);
         let k = view.k();
-        let mut t = s.serialize_tuple(13)?;
+        let mut t = s.serialize_tuple(15)?;
         t.serialize_element(&MAGIC)?;
         let bayes = view.bayes();
-        t.serialize_element(&if bayes.is_some() {
-            FORMAT_VERSION
-        } else {
-            VERSION_1
+        let open = bayes.and_then(|b| b.open());
+        t.serialize_element(&match (bayes.is_some(), open.is_some()) {
+            (false, _) => VERSION_1,
+            (true, false) => VERSION_2,
+            (true, true) => FORMAT_VERSION,
         })?;
         t.serialize_element(&narrow(k))?;
         t.serialize_element(&narrow(view.bins_ml()))?;
@@ -407,6 +416,10 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
             t.serialize_element(b.all_rows())?;
             t.serialize_element(&AxesSeq(b.axes()))?;
             t.serialize_element(b.all_terms())?;
+        }
+        if let Some(o) = &open {
+            t.serialize_element(&o.temperature())?;
+            t.serialize_element(&o.epsilon())?;
         }
         t.end()
     }
@@ -473,7 +486,7 @@ pub(crate) fn encoded_len<F: AsRef<[f32]>, G: AsRef<[f32]>>(
 /// such a non-canonical input would decode to a table whose encoding differs. Only the
 /// lengths need comparing: every other field has a fixed size and decodes losslessly,
 /// an overlong varint only ever adds bytes, and the version is fixed by whether the
-/// table has a Bayes head, which the header announced. Measures, writes nothing.
+/// table has a Bayes head and the open head's parameters, which the header announced. Measures, writes nothing.
 pub(crate) fn check_canonical<F: AsRef<[f32]>, G: AsRef<[f32]>>(
     len: usize,
     view: &TableView<'_, F, G>,
@@ -499,7 +512,8 @@ const fn varint_len(n: usize) -> usize {
 const MIN_ENCODED_LEN: usize = MAGIC.len() + 4 + 10 + 1 + CRC_LEN;
 
 /// Upper bound of the encoded size of a table with `k` classes, the given bin counts and
-/// `categories` Bayes categories (0 and 0 without a Bayes head); every name
+/// `categories` Bayes categories (0 and 0 without a Bayes head; with one, the open head's
+/// parameters are counted too); every name
 /// [`NAME_MAX`] bytes, every row count the largest `u64`.
 pub(crate) const fn max_encoded_len(
     k: usize,
@@ -517,6 +531,7 @@ pub(crate) const fn max_encoded_len(
             + varint_len(categories) + 10 * categories
             + varint_len(k) + 8 * k
             + varint_len(terms) + 4 * terms
+            + 4 * 2 // the open head: temperature, epsilon
     };
     let header = MAGIC.len() + 4 * varint_len(u16::MAX as usize);
     let settings = 2 + 4 + 4;

@@ -348,7 +348,15 @@ pub fn fit(source: &impl RowSource, params: &FitParams) -> Result<DynTable, FitE
     })
 }
 
-/// `table` with the Bayes head of `counts` smoothed by `lambda`.
+/// The open head's temperature of a table no validation data has tuned (DESIGN §1.8).
+pub const UNTUNED_TEMPERATURE: f32 = 1.0;
+/// The open head's `epsilon` of a table no validation data has tuned: no unknown
+/// category (DESIGN §1.8).
+pub const UNTUNED_EPSILON: f32 = 0.0;
+
+/// `table` with the Bayes head of `counts` smoothed by `lambda`, and the open head built
+/// on it with the untuned parameters ([`UNTUNED_TEMPERATURE`], [`UNTUNED_EPSILON`]):
+/// `tune` sets them from validation data.
 ///
 /// # Errors
 ///
@@ -361,6 +369,7 @@ pub fn with_bayes(
 ) -> Result<DynTable, FitError> {
     table
         .with_bayes(counts.spec(lambda))
+        .and_then(|t| t.with_open(UNTUNED_TEMPERATURE, UNTUNED_EPSILON))
         .map_err(FitError::Table)
 }
 

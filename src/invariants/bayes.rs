@@ -298,8 +298,9 @@ pub fn check_bayes_terms<T: IntoIterator<Item = f32>>(
 ///
 /// The first of [`Violation::BayesLambda`], [`Violation::BayesCategories`],
 /// [`Violation::CategoryRows`], [`Violation::BayesBins`], [`Violation::BayesEdge`],
-/// [`Violation::BayesTerm`], [`Violation::BayesFrequency`] or
-/// [`Violation::BayesFrequencySum`], in that order.
+/// [`Violation::BayesTerm`], [`Violation::BayesFrequency`],
+/// [`Violation::BayesFrequencySum`] or, with the open head, [`Violation::OpenParams`],
+/// in that order.
 pub fn check_bayes(head: &BayesView<'_>, classes: usize) -> Result<(), Violation> {
     let lambda = head.lambda();
     if !(lambda > 0.0 && lambda <= MAX_LAMBDA_BAYES) {
@@ -340,5 +341,29 @@ pub fn check_bayes(head: &BayesView<'_>, classes: usize) -> Result<(), Violation
             check_bayes_terms(category, logit, head.lambda(), terms, bins)?;
         }
     }
+    if let Some(open) = head.open() {
+        check_open_params(open.temperature(), open.epsilon())?;
+    }
     Ok(())
+}
+
+/// DESIGN §1.8, the open head's stored parameters: a temperature in
+/// `[MIN_TEMPERATURE, MAX_TEMPERATURE]`, and an `epsilon` that is `+0` or in
+/// `[f32::MIN_POSITIVE, MAX_EPSILON]`.
+///
+/// # Errors
+///
+/// [`Violation::OpenParams`] when either is out of range.
+pub fn check_open_params(temperature: f32, epsilon: f32) -> Result<(), Violation> {
+    let t_ok = (crate::MIN_TEMPERATURE..=crate::MAX_TEMPERATURE).contains(&temperature);
+    let e_ok = (epsilon == 0.0 && epsilon.is_sign_positive())
+        || (f32::MIN_POSITIVE..=crate::MAX_EPSILON).contains(&epsilon);
+    if t_ok && e_ok {
+        Ok(())
+    } else {
+        Err(Violation::OpenParams {
+            temperature,
+            epsilon,
+        })
+    }
 }

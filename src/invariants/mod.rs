@@ -17,7 +17,9 @@
 //! | §1.6, the Bayes head's table invariants | [`check_bayes`] (called by [`check_table`] and `check_dyn_table`), and the parts: [`check_bayes_axis`], [`check_bayes_terms`] |
 //! | §1.6, its scores | [`check_scores`] with [`Sum::Equal`] (no background) or [`Sum::AtMost`] ([`bayes_sum`] picks), [`check_prior_share`] without evidence, [`check_error`] |
 //!
-//! The Bayes head's violations cite DESIGN §1.6 instead of §1.3.
+//! | §1.8, the open head's scores | [`check_scores`] with [`Sum::AtMost`], [`check_open_decision`], [`open_reference`] within [`open_score_tolerance`] ([`open_mismatch`]), [`check_error`] |
+//!
+//! The Bayes head's violations cite DESIGN §1.6 instead of §1.3, the open head's §1.8.
 //!
 //! ```
 //! use mlmap::invariants::{
@@ -69,11 +71,13 @@ pub enum Sum {
 }
 
 mod bayes;
+mod open;
 mod scores;
 mod table;
 mod violation;
 
 pub use bayes::*;
+pub use open::*;
 pub use scores::*;
 pub use table::*;
 pub use violation::*;

@@ -249,6 +249,21 @@ pub enum Violation {
         /// `OS * pi[c]`, in `f64`.
         expected: f64,
     },
+    /// DESIGN §1.8: the open head's decided class is not the detector's (the largest
+    /// logit, the lower index among equal ones).
+    NotDetectorDecision {
+        /// The largest logit's class.
+        expected: usize,
+        /// The decided class.
+        found: usize,
+    },
+    /// DESIGN §1.8: the open head's temperature or epsilon is out of range.
+    OpenParams {
+        /// The stored temperature.
+        temperature: f32,
+        /// The stored epsilon.
+        epsilon: f32,
+    },
 }
 
 impl fmt::Display for Violation {
@@ -433,6 +448,17 @@ impl fmt::Display for Violation {
             } => write!(
                 f,
                 "DESIGN §1.6: without evidence, score of class {class} = {score:e} is not OS * pi = {expected:e}"
+            ),
+            Self::NotDetectorDecision { expected, found } => write!(
+                f,
+                "DESIGN §1.8: the open head decided class {found}, not the largest logit's class {expected}"
+            ),
+            Self::OpenParams {
+                temperature,
+                epsilon,
+            } => write!(
+                f,
+                "DESIGN §1.8: open head temperature {temperature:e} or epsilon {epsilon:e} out of range"
             ),
         }
     }

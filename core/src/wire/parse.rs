@@ -51,12 +51,14 @@ pub(crate) struct BayesSlots<'s> {
     pub(crate) terms: &'s mut [f32],
 }
 
-/// What a body held besides the classes' storage: the settings, the number of classes
-/// and, with a Bayes head, its lambda and the lengths of its three sequences.
+/// What a body held besides the classes' storage: the settings, the number of classes,
+/// with a Bayes head its lambda and the lengths of its three sequences, and with an
+/// open head (version 3) its temperature and epsilon as stored (not validated).
 pub(crate) struct Parsed {
     pub(crate) settings: Settings,
     pub(crate) classes: usize,
     pub(crate) bayes: Option<(f32, [usize; 3])>,
+    pub(crate) open: Option<(f32, f32)>,
 }
 
 /// The fields of one class besides its frequencies, as parsed (not validated).
@@ -75,10 +77,12 @@ pub(crate) struct ClassFields<'a> {
 
 /// Parses the body into `sink` (the one body parser: every table, fixed-size or not,
 /// decodes through it); every byte must be used. `bayes` says whether the header
-/// announced a Bayes section.
+/// announced a Bayes section, `open` whether the open head's parameters follow it
+/// (version 3; only with a Bayes section).
 pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     body: &'a [u8],
     bayes: bool,
+    open: bool,
     sink: &mut S,
 ) -> Result<Parsed, DecodeError> {
     let malformed = |_| DecodeError::Malformed;
@@ -106,6 +110,11 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     } else {
         None
     };
+    let open = if bayes.is_some() && open {
+        Some(<(f32, f32)>::deserialize(&mut de).map_err(malformed)?)
+    } else {
+        None
+    };
     let rest = de.finalize().map_err(malformed)?;
     if !rest.is_empty() {
         return Err(DecodeError::Malformed);
@@ -114,6 +123,7 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
         settings: settings.to_settings()?,
         classes,
         bayes,
+        open,
     })
 }
 

@@ -439,7 +439,7 @@ fn evidence_into(
             *e = match head {
                 Head::Ml => l,
                 Head::Map if l > 0.0 => l * p,
-                Head::Map | Head::Bayes => 0.0,
+                Head::Map | Head::Bayes | Head::Open => 0.0,
             };
         }
     }
