@@ -343,7 +343,7 @@ pub fn fit(source: &impl RowSource, params: &FitParams) -> Result<DynTable, FitE
         return Err(changed());
     }
     finish(&stats, &counts).map_err(|e| match e {
-        FitError::RowsDiffer { .. } | FitError::EdgesDiffer => changed(),
+        FitError::RowsDiffer { .. } | FitError::ClassRowsDiffer { .. } | FitError::EdgesDiffer => changed(),
         e => e,
     })
 }

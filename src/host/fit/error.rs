@@ -81,6 +81,17 @@ pub enum FitError {
         /// Rows in the counts (pass (b)).
         counts: u64,
     },
+    /// The bin counts of one class cover another number of rows than the statistics
+    /// of that class (the totals may agree): the shards of pass (b) are not those of
+    /// pass (a).
+    ClassRowsDiffer {
+        /// The class.
+        class: String,
+        /// Rows of the class in the statistics (pass (a)).
+        stats: u64,
+        /// Rows of the class in the bin counts (pass (b)).
+        counts: u64,
+    },
     /// Serialized statistics or counts cannot be decoded.
     Format {
         /// What is wrong with the bytes.
@@ -104,6 +115,7 @@ impl FitError {
             | Self::ParamsDiffer
             | Self::EdgesDiffer
             | Self::RowsDiffer { .. }
+            | Self::ClassRowsDiffer { .. }
             | Self::Format { .. } => true,
         }
     }
@@ -175,10 +187,24 @@ impl fmt::Display for FitError {
                 "the bin counts were made with the edges of other statistics; count every \
                  shard with the edges of the merged pass-(a) statistics",
             ),
+            Self::RowsDiffer { stats, counts } if stats == counts => write!(
+                f,
+                "the bin counts and the statistics both cover {stats} rows, but not the \
+                 same rows per class: the shards of pass (b) are not those of pass (a)"
+            ),
             Self::RowsDiffer { stats, counts } => write!(
                 f,
-                "the bin counts cover {counts} rows but the statistics {stats}: the shards of \
-                 pass (b) are not those of pass (a)"
+                "the bin counts cover {counts} rows but the statistics {stats} rows: the \
+                 shards of pass (b) are not those of pass (a)"
+            ),
+            Self::ClassRowsDiffer {
+                class,
+                stats,
+                counts,
+            } => write!(
+                f,
+                "the bin counts of class {class:?} cover {counts} rows but its statistics \
+                 {stats} rows: the shards of pass (b) are not those of pass (a)"
             ),
             Self::Format { reason } => write!(f, "not valid fit statistics: {reason}"),
         }
