@@ -5,9 +5,7 @@ use std::path::Path;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use super::dataset::{
-    echo, DataError, DataErrorKind, DataSource, Label, Location, Row, RowSource,
-};
+use super::dataset::{echo, DataError, DataErrorKind, DataSource, Label, Location, Row, RowSource};
 use super::error::HostError;
 
 /// Opens a data source (CSV file or NPY directory).
@@ -278,33 +276,17 @@ impl RowSource for Loaded {
 ///
 /// # Errors
 ///
-/// [`HostError::Input`] naming `path`, the number of classes of each, and the first
-/// position where they differ.
+/// [`HostError::Input`] naming `path` and both class lists (the first few names of a
+/// long list, and how many more it has).
 pub fn check_classes<'a>(
     path: &Path,
     data: &[String],
     table: impl Iterator<Item = &'a str>,
 ) -> Result<(), HostError> {
     let table: Vec<&str> = table.collect();
-    let first_difference = data
-        .iter()
-        .map(String::as_str)
-        .zip(table.iter().copied())
-        .position(|(a, b)| a != b);
-    let detail = match first_difference {
-        Some(i) => std::format!(
-            "class {} is {:?} here but {:?} in the table",
-            i + 1,
-            echo(data.get(i).map_or("", String::as_str)),
-            table.get(i).copied().unwrap_or_default()
-        ),
-        None if data.len() == table.len() => return Ok(()),
-        None => std::format!(
-            "it has {} classes and the table {}",
-            data.len(),
-            table.len()
-        ),
-    };
+    if data.len() == table.len() && data.iter().zip(&table).all(|(a, b)| a == b) {
+        return Ok(());
+    }
     let list = |names: &mut dyn Iterator<Item = &str>, n: usize| {
         let shown: Vec<String> = names.take(SHOWN_CLASSES).map(echo).collect();
         let more = n.saturating_sub(SHOWN_CLASSES);
@@ -317,8 +299,7 @@ pub fn check_classes<'a>(
     Err(HostError::input(
         path,
         std::format!(
-            "its classes [{}] differ from the table's [{}]: {detail} (same names, same \
-             order needed)",
+            "its classes [{}] differ from the table's [{}] (same names, same order needed)",
             list(&mut data.iter().map(String::as_str), data.len()),
             list(&mut table.iter().copied(), table.len()),
         ),

@@ -34,6 +34,8 @@ enum Quote {
     InQuoted,
     /// After a quote inside a quoted field: the closing quote, or the first of two.
     QuoteInQuoted,
+    /// After the closing quote and blanks (spaces, tabs, the `\r` of a CRLF).
+    AfterQuote,
 }
 
 /// A malformed record found by [`Guarded`], carried through the `csv` parser as an I/O
@@ -121,7 +123,8 @@ impl<R: Read> Guarded<R> {
             (Quote::QuoteInQuoted, b'"') | (Quote::InQuoted, _) => Quote::InQuoted,
             (_, b',') => Quote::StartField,
             (_, b'\n') => Quote::StartRecord,
-            (Quote::QuoteInQuoted, _) => {
+            (Quote::QuoteInQuoted | Quote::AfterQuote, b' ' | b'\t' | b'\r') => Quote::AfterQuote,
+            (Quote::QuoteInQuoted | Quote::AfterQuote, _) => {
                 return Err(Malformed {
                     line,
                     kind: DataErrorKind::TextAfterQuote,
@@ -179,7 +182,11 @@ struct Pending(Option<CsvReader>);
 
 impl fmt::Debug for Pending {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(if self.0.is_some() { "Pending(reader)" } else { "Pending(none)" })
+        f.write_str(if self.0.is_some() {
+            "Pending(reader)"
+        } else {
+            "Pending(none)"
+        })
     }
 }
 
@@ -513,8 +520,10 @@ mod tests {
                     kind: DataErrorKind::TextAfterQuote
                 })
             );
-            // A quote inside an unquoted field is a character of the field.
+            // A quote inside an unquoted field is a character of the field; blanks and
+            // a CRLF may follow a closing quote.
             assert_eq!(guard("a,b\n1\"2,3\n", chunk).1, None);
+            assert_eq!(guard("a,b\r\n\"1\" ,\"2\"\r\n", chunk).1, None);
         }
     }
 }

@@ -223,9 +223,9 @@ impl fmt::Display for DataErrorKind {
                  (magnitude at most {:e})",
                 f32::MAX
             ),
-            Self::UnterminatedQuote => f.write_str(
-                "a quoted field has no closing quote before the end of the file",
-            ),
+            Self::UnterminatedQuote => {
+                f.write_str("a quoted field has no closing quote before the end of the file")
+            }
             Self::TextAfterQuote => f.write_str(
                 "text follows the closing quote of a field; quote the whole field and \
                  double the quotes inside it",

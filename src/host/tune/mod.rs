@@ -407,8 +407,9 @@ fn log_grid(min: f64, max: f64, per_decade: usize, limit: f32) -> Result<Vec<f32
     let steps = (decades * per_decade as f64).round();
     if steps >= MAX_CANDIDATES as f64 {
         return Err(format!(
-            "the lambda grid would hold {} lambdas; a search holds at most {MAX_CANDIDATES} \
-             candidates: give fewer lambdas per decade",
+            "the lambda grid would hold {} lambdas ({decades:.3} decades at {per_decade} per \
+             decade); a search holds at most {MAX_CANDIDATES} candidates: give fewer lambdas \
+             per decade",
             steps + 1.0
         ));
     }

@@ -15,8 +15,8 @@ use crate::host::error::HostError;
 use crate::host::eval::{head_scores, Method};
 use crate::host::fit::{build_table, FitError, TrainingSet};
 use crate::host::metrics::{self, Metrics, MetricsConfig};
-use crate::host::DynTable;
 use crate::host::names::Named;
+use crate::host::DynTable;
 use crate::{EdgeMode, Gaussian, Head, Histogram, Settings, UpperTail};
 
 /// The grid of the Bayes head.
