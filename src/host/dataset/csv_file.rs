@@ -23,7 +23,7 @@ use super::{
 /// Where the quoting state machine is (the `csv` crate's, for `"` quotes doubled inside
 /// quoted fields, `,` delimiters and `\n` terminators).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Quote {
+enum Quoting {
     /// Between records: a `\n` here is a blank line, which the parser skips.
     StartRecord,
     /// At the start of a field.
@@ -33,9 +33,9 @@ enum Quote {
     /// Inside a quoted field.
     InQuoted,
     /// After a quote inside a quoted field: the closing quote, or the first of two.
-    QuoteInQuoted,
+    QuoteSeen,
     /// After the closing quote and blanks (spaces, tabs, the `\r` of a CRLF).
-    AfterQuote,
+    Closed,
 }
 
 /// A malformed record found by [`Guarded`], carried through the `csv` parser as an I/O
@@ -59,7 +59,7 @@ impl std::error::Error for Malformed {}
 #[derive(Debug)]
 struct Guarded<R> {
     inner: R,
-    state: Quote,
+    state: Quoting,
     /// The line of the next byte (1-based).
     line: u64,
     /// Bytes of the record being read so far.
@@ -74,7 +74,7 @@ impl<R: Read> Guarded<R> {
     fn new(inner: R) -> Self {
         Self {
             inner,
-            state: Quote::StartRecord,
+            state: Quoting::StartRecord,
             line: 1,
             record_bytes: 0,
             starts: VecDeque::new(),
@@ -98,14 +98,14 @@ impl<R: Read> Guarded<R> {
 
     /// Moves the state machine over one byte.
     fn step(&mut self, b: u8) -> Result<(), Malformed> {
-        if self.state == Quote::StartRecord {
+        if self.state == Quoting::StartRecord {
             if b == b'\n' {
                 self.line += 1;
                 return Ok(());
             }
             self.starts.push_back(self.line);
             self.record_bytes = 0;
-            self.state = Quote::StartField;
+            self.state = Quoting::StartField;
         }
         self.record_bytes += 1;
         let line = self.starts.back().copied().unwrap_or(self.line);
@@ -118,19 +118,19 @@ impl<R: Read> Guarded<R> {
             });
         }
         self.state = match (self.state, b) {
-            (Quote::StartField, b'"') => Quote::InQuoted,
-            (Quote::InQuoted, b'"') => Quote::QuoteInQuoted,
-            (Quote::QuoteInQuoted, b'"') | (Quote::InQuoted, _) => Quote::InQuoted,
-            (_, b',') => Quote::StartField,
-            (_, b'\n') => Quote::StartRecord,
-            (Quote::QuoteInQuoted | Quote::AfterQuote, b' ' | b'\t' | b'\r') => Quote::AfterQuote,
-            (Quote::QuoteInQuoted | Quote::AfterQuote, _) => {
+            (Quoting::StartField, b'"') => Quoting::InQuoted,
+            (Quoting::InQuoted, b'"') => Quoting::QuoteSeen,
+            (Quoting::QuoteSeen, b'"') | (Quoting::InQuoted, _) => Quoting::InQuoted,
+            (_, b',') => Quoting::StartField,
+            (_, b'\n') => Quoting::StartRecord,
+            (Quoting::QuoteSeen | Quoting::Closed, b' ' | b'\t' | b'\r') => Quoting::Closed,
+            (Quoting::QuoteSeen | Quoting::Closed, _) => {
                 return Err(Malformed {
                     line,
                     kind: DataErrorKind::TextAfterQuote,
                 })
             }
-            _ => Quote::InField,
+            _ => Quoting::InField,
         };
         if b == b'\n' {
             self.line += 1;
@@ -150,7 +150,7 @@ impl<R: Read> Read for Guarded<R> {
                 r => break r?,
             }
         };
-        if n == 0 && self.state == Quote::InQuoted {
+        if n == 0 && self.state == Quoting::InQuoted {
             let m = Malformed {
                 line: self.starts.back().copied().unwrap_or(self.line),
                 kind: DataErrorKind::UnterminatedQuote,
