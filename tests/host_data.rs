@@ -993,3 +993,208 @@ fn big_endian_float32_and_int32() {
     assert_eq!(rows[1].label, Label::Class(1));
     assert_eq!((rows[0].objectness, rows[1].objectness), (0.75, 1.0));
 }
+
+// ---------------------------------------------------------------------------------------
+// Strict CSV, limits, pipes (DESIGN §2)
+// ---------------------------------------------------------------------------------------
+
+#[test]
+fn csv_quoting_is_strict_and_errors_name_the_record_line() {
+    use mlmap::host::dataset::MAX_RECORD_BYTES;
+    // (input, kind, line)
+    let long = format!("label,a,b\na,1,2\n\na,{},2\n", "1".repeat(MAX_RECORD_BYTES));
+    let cases: Vec<(&[u8], DataErrorKind, u64)> = vec![
+        // The file ends inside a quoted field: the record's line, not accepted as "3".
+        (
+            b"id,label,objectness,car,cyclist\n1,car,0.5,1,2\n2,car,0.5,1,\"3",
+            DataErrorKind::UnterminatedQuote,
+            3,
+        ),
+        // ... also when the quote opened lines earlier.
+        (
+            b"label,a,b\na,1,\"2\n\n\n",
+            DataErrorKind::UnterminatedQuote,
+            2,
+        ),
+        // Text after a closing quote.
+        (
+            b"label,a,b\na,1,2\na,\"1\"5,2\n",
+            DataErrorKind::TextAfterQuote,
+            3,
+        ),
+        // Invalid UTF-8 in a record whose quoted field spans lines: the line the record
+        // starts on.
+        (b"label,a,b\n\"a\n\xff\",1,2\n", DataErrorKind::NotUtf8, 2),
+        // A record longer than the limit, refused while it is read.
+        (
+            long.as_bytes(),
+            DataErrorKind::RecordTooLong {
+                limit: MAX_RECORD_BYTES,
+            },
+            4,
+        ),
+    ];
+    for (text, kind, line) in cases {
+        let (_dir, path) = file("data.csv", text);
+        let err = read_all(&path).expect_err("refused");
+        assert_eq!(err.kind(), &kind, "{err}");
+        assert_eq!(err.line(), Some(line), "{err}");
+        assert!(err.to_string().len() < 300, "{err}");
+    }
+    // The first data row's error names line 2, not the header.
+    let err = csv_error("label,a,b\na,x,2\n");
+    assert_eq!(err.line(), Some(2), "{err}");
+    // A doubled quote inside a quoted field is a quote; a bare one inside an unquoted
+    // field is a character: both read.
+    let (_dir, path) = file("d.csv", b"id,label,a,b\n\"x\"\"y\",a,1,2\nq\"r,b,3,4\n");
+    let (_, rows) = read_all(&path).unwrap();
+    assert_eq!(rows[0].id.as_deref(), Some("x\"y"));
+    assert_eq!(rows[1].id.as_deref(), Some("q\"r"));
+}
+
+#[test]
+fn a_long_field_is_echoed_truncated() {
+    let field = "z".repeat(100_000);
+    let err = csv_error(&format!("label,a,b\na,{field},2\n"));
+    let msg = err.to_string();
+    assert!(msg.len() < 300, "{} bytes", msg.len());
+    assert!(msg.contains("100000 bytes"), "{msg}");
+    assert_eq!(err.line(), Some(2));
+    // The same for a label and a long column name.
+    let err = csv_error(&format!("label,a,b\n{field},1,2\n"));
+    assert!(err.to_string().len() < 300, "{err}");
+    let err = csv_error(&format!("label,a,{field}\na,1,2\n"));
+    assert!(err.to_string().len() < 300, "{err}");
+}
+
+#[test]
+fn logits_beyond_f32_are_refused_with_their_position() {
+    for text in ["1e39", "-3.5e38", "4e38"] {
+        let err = csv_error(&format!("label,a,b\na,1,2\nb,{text},0\n"));
+        assert_eq!(
+            err.kind(),
+            &DataErrorKind::OutOfF32 { text: text.into() },
+            "{err}"
+        );
+        assert_eq!(err.line(), Some(3));
+        assert_eq!(err.column(), Some("a"));
+        assert!(err.to_string().contains("out of range"), "{err}");
+    }
+    // The largest f32 is a logit.
+    let (_dir, path) = file("d.csv", b"label,a,b\na,3.4028234e38,0\n");
+    read_all(&path).unwrap();
+    // A float64 NPY logit beyond f32: row index and column.
+    let dir = npy_dir();
+    let mut logits = vec![0.0f64; 4 * 2];
+    logits[2 * 2 + 1] = 1e39;
+    write_npy(&dir.path().join("logits.npy"), &[4, 2], &logits);
+    let err = read_all(dir.path()).unwrap_err();
+    assert_eq!(
+        err.kind(),
+        &DataErrorKind::OutOfF32 {
+            text: "1000000000000000000000000000000000000000".into()
+        },
+        "{err}"
+    );
+    assert_eq!(err.location(), Some(Location::Row(2)));
+    assert_eq!(err.column(), Some("cyclist"));
+}
+
+#[test]
+fn classes_txt_may_start_with_a_bom() {
+    let dir = npy_dir();
+    let classes = std::fs::read_to_string(dir.path().join("classes.txt")).unwrap();
+    std::fs::write(dir.path().join("classes.txt"), format!("\u{feff}{classes}")).unwrap();
+    let (src, _) = read_all(dir.path()).unwrap();
+    assert_eq!(src.classes()[0], classes.lines().next().unwrap().trim());
+}
+
+#[test]
+fn the_number_of_classes_is_capped() {
+    use mlmap::host::dataset::MAX_CLASSES;
+    let header: Vec<String> = (0..=MAX_CLASSES).map(|i| format!("c{i}")).collect();
+    let zeros = vec!["0"; MAX_CLASSES + 1];
+    let err = csv_error(&format!("{}\n{}\n", header.join(","), zeros.join(",")));
+    assert_eq!(
+        err.kind(),
+        &DataErrorKind::ClassCount {
+            found: MAX_CLASSES + 1
+        }
+    );
+    assert!(err.to_string().contains("between 2 and 4096"), "{err}");
+    assert!(err.to_string().len() < 300, "{err}");
+    // MAX_CLASSES classes are fine.
+    let (_dir, path) = file(
+        "d.csv",
+        format!(
+            "{}\n{}\n",
+            header[..MAX_CLASSES].join(","),
+            zeros[..MAX_CLASSES].join(",")
+        )
+        .as_bytes(),
+    );
+    assert_eq!(read_all(&path).unwrap().0.classes().len(), MAX_CLASSES);
+}
+
+#[test]
+fn an_npy_shape_whose_size_overflows_is_too_large() {
+    let dir = npy_dir();
+    write_raw_npy(
+        &dir.path().join("logits.npy"),
+        "<f4",
+        "(4611686018427387904, 3)",
+        &[],
+    );
+    let err = read_all(dir.path()).unwrap_err();
+    assert_eq!(
+        err.kind(),
+        &DataErrorKind::NpyTooLarge {
+            shape: vec![4611686018427387904, 3]
+        }
+    );
+    let msg = err.to_string();
+    assert!(msg.contains("too large"), "{msg}");
+    assert!(!msg.contains("18446744073709551615"), "{msg}");
+}
+
+/// A FIFO fed by a writer thread; the reading must finish within a few seconds.
+#[cfg(unix)]
+#[test]
+fn a_fifo_is_read_once_in_one_pass() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("in.csv");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let text = "label,a,b\na,1,2\n\nb,\"3\n\",4\nb,0,1";
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || std::fs::write(fifo, text).unwrap())
+    };
+    let (done_tx, done_rx) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let src = DataSource::open(&fifo).unwrap();
+        assert!(!src.rereadable());
+        let mut rows = Vec::new();
+        src.for_each_row(|r| {
+            rows.push(Owned::from(r));
+            Ok::<(), DataError>(())
+        })
+        .unwrap();
+        // A second pass is refused, naming the file.
+        let again = src.for_each_row(|_| Ok::<(), DataError>(())).unwrap_err();
+        done_tx.send((rows, again)).unwrap();
+    });
+    let (rows, again) = done_rx
+        .recv_timeout(std::time::Duration::from_secs(20))
+        .expect("reading the FIFO hangs");
+    reader.join().unwrap();
+    writer.join().unwrap();
+    let lines: Vec<Option<u64>> = rows.iter().map(|r| r.line).collect();
+    assert_eq!(lines, [Some(2), Some(4), Some(6)]);
+    assert_eq!(rows[2].logits, [0.0, 1.0]);
+    assert_eq!(again.kind(), &DataErrorKind::ReadOnce);
+    assert!(again.to_string().contains("in.csv"), "{again}");
+}

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mlmap::host::dataset::DataSource;
+use mlmap::host::dataset::{DataErrorKind, DataSource};
 use mlmap::host::fit::{class_moments, fit, FitError, FitParams, TrainingSet};
 use mlmap::host::DynTable;
 use mlmap::{EdgeMode, UpperTail, VARIANCE_FLOOR};
@@ -273,11 +273,22 @@ fn ranges_a_table_cannot_hold_are_refused() {
         fit(&src, &params),
         Err(FitError::Edges { ref class, bins: 100, .. }) if class == "a"
     ));
+    // Logits beyond f32 are refused by the reader, with their line and column.
     let (_dir, src) = csv(&two_classes(&[1e39, 2e39], &[1.0, 2.0]));
-    assert_eq!(
+    match fit(&src, &FitParams::default()) {
+        Err(FitError::Data(e)) => {
+            assert!(matches!(e.kind(), DataErrorKind::OutOfF32 { .. }), "{e}");
+            assert_eq!(e.line(), Some(2), "{e}");
+            assert_eq!(e.column(), Some("a"), "{e}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // Logits within f32 whose range a histogram cannot split.
+    let (_dir, src) = csv(&two_classes(&[3e38, -3e38], &[1.0, 2.0]));
+    assert!(matches!(
         fit(&src, &FitParams::default()),
-        Err(FitError::OutOfF32 { class: "a".into() })
-    );
+        Err(FitError::Edges { ref class, .. }) if class == "a"
+    ));
 }
 
 #[test]

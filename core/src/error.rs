@@ -215,7 +215,7 @@ impl fmt::Display for DecodeError {
             Self::Corrupted => f.write_str("table checksum does not match its contents"),
             Self::UnsupportedVersion { found } => write!(
                 f,
-                "table format version {found} is not supported (this build reads version {})",
+                "table format version {found} is not supported (this build reads versions 1 to {})",
                 crate::FORMAT_VERSION
             ),
             Self::ShapeMismatch { expected, found } => write!(

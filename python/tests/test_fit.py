@@ -96,7 +96,7 @@ def test_large_fit_splits_rows_and_gives_the_bytes_of_one_pass(data):
          r'^classes: column "background": a class cannot be named "background"'),
         (dict(classes=["a", "b", "a"]), ValueError, r'^classes: column "a": the name appears more than once$'),
         (dict(classes=["a", "b", "x" * 32]), ValueError, r"the class name is 32 bytes long"),
-        (dict(logits=np.zeros((4, 1))), ValueError, r"^classes: found 1 class column\(s\); between 2 and 65535"),
+        (dict(logits=np.zeros((4, 1))), ValueError, r"^classes: found 1 class column\(s\); between 2 and 4096"),
         (dict(logits=np.array([[0.0, 1.0, 2.0]] * 3 + [[0.0, np.nan, 0.0]])), ValueError,
          r'^logits: row index 3: column "class1": "NaN" is not a finite number$'),
         (dict(logits=np.array([[0.0, 1.0, 2.0]] * 3 + [[-np.inf, 0.0, 0.0]])), ValueError,

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use super::dataset::{DataError, DataErrorKind, DataSource, Label, Location, Row, RowSource};
+use super::dataset::{echo, DataError, DataErrorKind, DataSource, Label, Location, Row, RowSource};
 use super::error::HostError;
 
 /// Opens a data source (CSV file or NPY directory).
@@ -15,6 +15,21 @@ use super::error::HostError;
 /// [`HostError`] naming the file: bad input for a malformed file, internal for I/O.
 pub fn open(path: &Path) -> Result<DataSource, HostError> {
     Ok(DataSource::open(path)?)
+}
+
+/// Opens a data source for a command that reads it more than once (`fit` makes two
+/// passes): an input that can be read only once (a pipe, a FIFO: DESIGN §2) is refused
+/// before anything is read from it.
+///
+/// # Errors
+///
+/// As [`open`]; [`DataErrorKind::ReadOnce`] for a file that is not a regular file or a
+/// directory.
+pub fn open_twice(path: &Path) -> Result<DataSource, HostError> {
+    if std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        return Err(DataError::new(path, DataErrorKind::ReadOnce).into());
+    }
+    open(path)
 }
 
 /// Opens a data source of quantized logits (an NPY directory's logits `int8` or
@@ -228,12 +243,11 @@ impl RowSource for Loaded {
                     return Err(bad(kind).in_column("label").into());
                 }
             }
-            if let Some((j, x)) = logits.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-                let kind = DataErrorKind::NotFinite {
-                    text: x.to_string(),
-                };
-                let column = self.classes.get(j).cloned().unwrap_or_default();
-                return Err(bad(kind).in_column(column).into());
+            for (j, &x) in logits.iter().enumerate() {
+                if let Err(kind) = super::dataset::check_logit(x, || x.to_string()) {
+                    let column = self.classes.get(j).cloned().unwrap_or_default();
+                    return Err(bad(kind).in_column(column).into());
+                }
             }
             if !(0.0..=1.0).contains(&objectness) {
                 let kind = DataErrorKind::ObjectnessRange {
@@ -262,22 +276,35 @@ impl RowSource for Loaded {
 ///
 /// # Errors
 ///
-/// [`HostError::Input`] naming `path` and both class lists.
+/// [`HostError::Input`] naming `path` and both class lists (the first few names of a
+/// long list, and how many more it has).
 pub fn check_classes<'a>(
     path: &Path,
     data: &[String],
     table: impl Iterator<Item = &'a str>,
 ) -> Result<(), HostError> {
     let table: Vec<&str> = table.collect();
-    if data.len() != table.len() || data.iter().zip(&table).any(|(a, b)| a != b) {
-        return Err(HostError::input(
-            path,
-            std::format!(
-                "its classes [{}] differ from the table's [{}] (same names, same order needed)",
-                data.join(", "),
-                table.join(", ")
-            ),
-        ));
+    if data.len() == table.len() && data.iter().zip(&table).all(|(a, b)| a == b) {
+        return Ok(());
     }
-    Ok(())
+    let list = |names: &mut dyn Iterator<Item = &str>, n: usize| {
+        let shown: Vec<String> = names.take(SHOWN_CLASSES).map(echo).collect();
+        let more = n.saturating_sub(SHOWN_CLASSES);
+        if more == 0 {
+            shown.join(", ")
+        } else {
+            std::format!("{}, ... and {more} more", shown.join(", "))
+        }
+    };
+    Err(HostError::input(
+        path,
+        std::format!(
+            "its classes [{}] differ from the table's [{}] (same names, same order needed)",
+            list(&mut data.iter().map(String::as_str), data.len()),
+            list(&mut table.iter().copied(), table.len()),
+        ),
+    ))
 }
+
+/// How many class names a message about two class lists shows of each.
+const SHOWN_CLASSES: usize = 8;

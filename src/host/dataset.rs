@@ -11,7 +11,9 @@
 //! optionally `objectness` (default 1.0 when the column is absent) and `id` (carried as
 //! text); every other column is the logit of the class it names, in order. Fields are
 //! trimmed of surrounding whitespace; lines end with LF or CRLF; blank lines are
-//! skipped.
+//! skipped. A field that starts with a quote ends with one (quotes inside are
+//! doubled); a record is at most [`MAX_RECORD_BYTES`] long. A file that is not a
+//! regular file (a pipe) is read once: its rows go to the first pass.
 //!
 //! # NPY directory
 //!
@@ -23,8 +25,11 @@
 //!
 //! Everything DESIGN §2 calls malformed, as a [`DataError`] naming the file, the line
 //! (CSV) or row index (NPY) and the column: missing or extra fields, text in a number,
-//! a label that is not a class, a NaN or infinite logit, an objectness that is NaN or
-//! outside `[0, 1]`, an empty field where a number is needed, fewer than 2 classes,
+//! a label that is not a class, a NaN or infinite logit (or one beyond the range of
+//! `f32`), an objectness that is NaN or
+//! outside `[0, 1]`, an empty field where a number is needed, fewer than 2 classes or
+//! more than [`MAX_CLASSES`], a quoted field without its closing quote, text after a
+//! closing quote, a record longer than [`MAX_RECORD_BYTES`],
 //! repeated column names, a class named `background` or longer than
 //! [`NAME_MAX`](crate::NAME_MAX) bytes, empty, missing or unreadable files, and NPY
 //! arrays whose dtype, order, shape or size do not fit.
@@ -35,10 +40,47 @@ mod npy_dir;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::string::String;
+use std::string::{String, ToString};
 use std::vec::Vec;
 
 pub use error::{DataError, DataErrorKind, Location};
+
+/// The longest CSV record, in bytes (a line, or the lines of a record whose quoted
+/// fields hold line breaks): a longer one is refused while it is read, so memory stays
+/// bounded whatever the file (DESIGN §2).
+pub const MAX_RECORD_BYTES: usize = 1 << 20;
+
+/// The most classes an input may have (DESIGN §2): the columns of a CSV file or of
+/// `logits.npy`.
+pub const MAX_CLASSES: usize = 4096;
+
+/// How many characters of a field an error message repeats.
+const ECHO_CHARS: usize = 48;
+
+/// `text` for an error message: whole when short, else its first characters and its
+/// length (a field can be up to [`MAX_RECORD_BYTES`] long).
+pub(crate) fn echo(text: &str) -> String {
+    match text.char_indices().nth(ECHO_CHARS) {
+        None => text.to_string(),
+        Some((end, _)) => std::format!(
+            "{}... ({} bytes)",
+            text.get(..end).unwrap_or_default(),
+            text.len()
+        ),
+    }
+}
+
+/// Checks a logit read as `f64`: finite, and finite in the layer's `f32` too
+/// (DESIGN §6.16). `text` gives the value as written, for the error.
+pub(crate) fn check_logit(v: f64, text: impl FnOnce() -> String) -> Result<f64, DataErrorKind> {
+    if !v.is_finite() {
+        Err(DataErrorKind::NotFinite { text: text() })
+    } else if !(v as f32).is_finite() {
+        Err(DataErrorKind::OutOfF32 { text: text() })
+    } else {
+        Ok(v)
+    }
+}
 
 /// The label of a row.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -220,6 +262,16 @@ impl DataSource {
         }
     }
 
+    /// `true` when [`DataSource::for_each_row`] can be called more than once: the input
+    /// is a regular file or an NPY directory. A pipe, a FIFO or a device is read once
+    /// (DESIGN §2); a second pass fails with [`DataErrorKind::ReadOnce`].
+    pub fn rereadable(&self) -> bool {
+        match &self.format {
+            Format::Csv(s) => s.rereadable(),
+            Format::Npy(_) => true,
+        }
+    }
+
     /// The number of rows when it is known without reading them (NPY directories).
     pub fn row_count_hint(&self) -> Option<u64> {
         match &self.format {
@@ -232,7 +284,8 @@ impl DataSource {
     /// or of `f`.
     ///
     /// Memory use does not depend on the number of rows. Each call reads the input
-    /// again from the start.
+    /// again from the start; an input that can be read only once (see
+    /// [`DataSource::rereadable`]) gives its rows to the first call.
     ///
     /// # Errors
     ///
@@ -257,7 +310,7 @@ fn check_class_names(
     names: &[String],
     error: impl Fn(usize, DataErrorKind) -> DataError,
 ) -> Result<HashMap<String, usize>, DataError> {
-    if names.len() < 2 || names.len() > usize::from(u16::MAX) {
+    if names.len() < 2 || names.len() > MAX_CLASSES {
         return Err(error(
             usize::MAX,
             DataErrorKind::ClassCount { found: names.len() },

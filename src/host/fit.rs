@@ -343,7 +343,9 @@ pub fn fit(source: &impl RowSource, params: &FitParams) -> Result<DynTable, FitE
         return Err(changed());
     }
     finish(&stats, &counts).map_err(|e| match e {
-        FitError::RowsDiffer { .. } | FitError::EdgesDiffer => changed(),
+        FitError::RowsDiffer { .. } | FitError::ClassRowsDiffer { .. } | FitError::EdgesDiffer => {
+            changed()
+        }
         e => e,
     })
 }
@@ -360,17 +362,29 @@ pub const UNTUNED_EPSILON: f32 = 0.0;
 ///
 /// # Errors
 ///
-/// [`FitError::Table`] when the head breaks an invariant of §1.6 (e.g. a lambda out of
+/// [`FitError::ClassTable`] (or [`FitError::Table`]) when the head breaks an invariant of §1.6 (e.g. a lambda out of
 /// range, or counts for another number of classes).
 pub fn with_bayes(
     table: DynTable,
     counts: &BayesCounts,
     lambda: f32,
 ) -> Result<DynTable, FitError> {
+    let names: Vec<String> = table.class_names().map(str::to_string).collect();
     table
         .with_bayes(counts.spec(lambda))
         .and_then(|t| t.with_open(UNTUNED_TEMPERATURE, UNTUNED_EPSILON))
-        .map_err(FitError::Table)
+        .map_err(|e| table_error(e, |i| names.get(i).map_or("background", String::as_str)))
+}
+
+/// A table error, naming the class (`name` of its index) when it concerns one.
+fn table_error<'a>(e: TableError, name: impl Fn(usize) -> &'a str) -> FitError {
+    match error::class_index(&e) {
+        Some(i) => FitError::ClassTable {
+            class: name(usize::from(i)).to_string(),
+            error: e,
+        },
+        None => FitError::Table(e),
+    }
 }
 
 /// Assembles a table from per-class moments and the histograms of both heads (one of
@@ -379,7 +393,7 @@ pub fn with_bayes(
 /// # Errors
 ///
 /// [`FitError::OutOfF32`] when a mean or variance does not fit in `f32`;
-/// [`FitError::Table`] when the parts break another table invariant (mismatched bin
+/// [`FitError::ClassTable`] (or [`FitError::Table`]) when the parts break another table invariant (mismatched bin
 /// counts or class counts, invalid lambdas, ...).
 pub fn build_table(
     moments: &[ClassMoments],
@@ -409,7 +423,8 @@ pub fn build_table(
             map_freqs: b.frequencies(),
         });
     }
-    DynTable::new(settings, specs).map_err(FitError::Table)
+    DynTable::new(settings, specs)
+        .map_err(|e| table_error(e, |i| moments.get(i).map_or("", |m| m.name())))
 }
 
 /// The training values of every class, held in memory, for fitting many tables from

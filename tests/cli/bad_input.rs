@@ -385,7 +385,7 @@ fn undefined_metrics_are_null_and_undefined_objectives_refused() {
     write(
         d,
         "background.csv",
-        "label,car,cyclist,pedestrian\nbackground,1,2,3\nbackground,1e308,-1e308,3\n",
+        "label,car,cyclist,pedestrian\nbackground,1,2,3\nbackground,3e38,-3e38,3\n",
     );
     let v = ok_json(
         d,

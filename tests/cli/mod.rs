@@ -61,6 +61,14 @@ mod usage;
 #[cfg(unix)]
 mod outputs;
 
+/// Inputs read once (FIFOs, pipes), outputs that keep their modes or are refused when
+/// write-protected, runs ended by a signal, and export-c over its own table.
+#[cfg(unix)]
+mod streams;
+
+/// Messages that say what is true, and limits that refuse before the work.
+mod messages;
+
 // ---------------------------------------------------------------------------------------
 // Running the binary
 // ---------------------------------------------------------------------------------------

@@ -64,6 +64,7 @@ pub struct FitSettings {
         long,
         default_value_t = 0.0055,
         value_name = "X",
+        value_parser = f32_value,
         allow_negative_numbers = true
     )]
     pub lambda_ml: f32,
@@ -75,6 +76,7 @@ pub struct FitSettings {
         long,
         default_value_t = 0.00012,
         value_name = "X",
+        value_parser = f32_value,
         allow_negative_numbers = true
     )]
     pub lambda_map: f32,
@@ -92,6 +94,7 @@ pub struct FitSettings {
         long,
         default_value_t = 0.001,
         value_name = "X",
+        value_parser = f32_value,
         allow_negative_numbers = true
     )]
     pub lambda_bayes: f32,
@@ -347,4 +350,28 @@ pub struct DemoArgs {
     /// Directory the tables, reports and plots are written into.
     #[arg(long, default_value = "mlmap-demo", value_name = "DIR")]
     pub output: PathBuf,
+}
+
+/// A 32-bit float flag, refused when the `f32` is not the number written: a finite
+/// value beyond `f32::MAX`, or a nonzero value that rounds to 0. Values out of a
+/// flag's range are refused later, by the flag's own check.
+pub fn f32_value(text: &str) -> Result<f32, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number"))?;
+    let x = v as f32;
+    if v.is_finite() && !x.is_finite() {
+        return Err(format!(
+            "{text} is beyond the range of a 32-bit float (magnitude at most {:e})",
+            f32::MAX
+        ));
+    }
+    if v != 0.0 && x == 0.0 {
+        return Err(format!(
+            "{text} is too small for a 32-bit float: it would be 0 (smallest magnitude {:e})",
+            f32::from_bits(1)
+        ));
+    }
+    Ok(x)
 }

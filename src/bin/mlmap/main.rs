@@ -19,18 +19,35 @@ mod error;
 mod output;
 mod report;
 mod shared;
+mod signals;
 
+use std::io::{self, Write};
 use std::process::ExitCode;
 
 use clap::Parser;
 
 fn main() -> ExitCode {
+    if let Err(e) = signals::install() {
+        eprintln!("mlmap: cannot install the signal handlers: {e}");
+        return ExitCode::from(1);
+    }
     let cli = match args::Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
-            let _ = e.print();
-            return ExitCode::from(code);
+            if e.use_stderr() {
+                let _ = e.print();
+                return ExitCode::from(2);
+            }
+            // `--help` and `--version`: a failed write is a failure.
+            let printed = e.print().and_then(|()| io::stdout().flush());
+            return match printed {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) if e.kind() == io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("mlmap: stdout: {e}");
+                    ExitCode::from(1)
+                }
+            };
         }
     };
     match cmd::run(cli) {

@@ -5,9 +5,12 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use crate::error::{CliError, Result};
+use crate::signals;
 
-/// Checks that `path` can be an output file: its directory exists and `path` is not a
-/// directory. Commands call it before any long work, so a mistyped output fails fast.
+/// Checks that `path` can be an output file: its directory exists, `path` is not a
+/// directory, and an existing regular file there may be replaced: it is not
+/// write-protected. Commands call it before any long work, so a mistyped output fails
+/// fast.
 pub fn check_target(path: &Path) -> Result<()> {
     let dir = parent_dir(path);
     if !dir.is_dir() {
@@ -19,7 +22,45 @@ pub fn check_target(path: &Path) -> Result<()> {
             "is a directory; the output must be a file path",
         ));
     }
+    if let Ok(meta) = fs::metadata(path) {
+        if meta.is_file() && write_protected(path, &meta) {
+            return Err(CliError::input(
+                path,
+                format!(
+                    "is write-protected (mode {:04o}); make it writable or remove it to \
+                     replace it",
+                    mode(&meta)
+                ),
+            ));
+        }
+    }
     Ok(())
+}
+
+/// The permission bits of a file.
+#[cfg(unix)]
+fn mode(meta: &fs::Metadata) -> u32 {
+    use std::os::unix::fs::PermissionsExt;
+    meta.permissions().mode() & 0o7777
+}
+
+#[cfg(not(unix))]
+fn mode(meta: &fs::Metadata) -> u32 {
+    if meta.permissions().readonly() {
+        0o444
+    } else {
+        0o644
+    }
+}
+
+/// Whether the existing file `path` is write-protected: no write bit at all (checked on
+/// the bits, since the superuser may open any file), or not writable by this process.
+fn write_protected(path: &Path, meta: &fs::Metadata) -> bool {
+    mode(meta) & 0o222 == 0
+        || fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .is_err_and(|e| e.kind() == io::ErrorKind::PermissionDenied)
 }
 
 /// Files of an NPY directory input (docs/DESIGN.md §2) that an output could replace.
@@ -110,8 +151,9 @@ fn io_error(path: &Path, what: &str, e: &io::Error) -> CliError {
 }
 
 /// Writes `path` through `fill`: into a temporary file in the same directory, renamed
-/// into place only when everything was written. On any error the temporary file is
-/// removed and `path` is untouched.
+/// into place only when everything was written. On any error, and on SIGINT, SIGTERM
+/// or SIGHUP, the temporary file is removed and `path` is untouched. The file has the
+/// permission bits of the file it replaces, or those the umask gives a new file.
 ///
 /// An existing `path` that is not a regular file (`/dev/null`, `/dev/stdout`, a FIFO) is
 /// written directly instead: renaming over it would replace the device with a file.
@@ -126,11 +168,25 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
         fill(&mut w)?;
         return w.flush().map_err(|e| io_error(path, "cannot write", &e));
     }
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".mlmap-")
-        .suffix(".tmp")
+    // A new file gets the mode the umask gives (0666 less the umask, as any program's
+    // output); a replaced file keeps its permission bits.
+    let existing = fs::metadata(path).ok().filter(fs::Metadata::is_file);
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".mlmap-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder
         .tempfile_in(parent_dir(path))
         .map_err(|e| io_error(path, "cannot create a temporary file", &e))?;
+    let registered = signals::Registered::new(tmp.path().to_path_buf());
+    if let Some(meta) = &existing {
+        tmp.as_file()
+            .set_permissions(meta.permissions())
+            .map_err(|e| io_error(path, "cannot set the permissions", &e))?;
+    }
     {
         let mut w = io::BufWriter::new(tmp.as_file_mut());
         fill(&mut w)?;
@@ -139,7 +195,10 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
     tmp.as_file()
         .sync_all()
         .map_err(|e| io_error(path, "cannot sync", &e))?;
-    tmp.persist(path)
+    // The target may have become write-protected while the output was computed.
+    check_target(path)?;
+    registered
+        .finish(|| tmp.persist(path))
         .map_err(|e| io_error(path, "cannot rename into place", &e.error))?;
     Ok(())
 }

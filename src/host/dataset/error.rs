@@ -54,7 +54,8 @@ pub enum DataErrorKind {
         /// Length of the name in bytes.
         len: usize,
     },
-    /// There are fewer than 2 (or more than 65535) class columns.
+    /// There are fewer than 2 (or more than [`MAX_CLASSES`](super::MAX_CLASSES)) class
+    /// columns.
     ClassCount {
         /// Number of class columns found.
         found: usize,
@@ -78,6 +79,23 @@ pub enum DataErrorKind {
         /// The value as written (CSV) or printed (NPY).
         text: String,
     },
+    /// A logit is finite but beyond the range of `f32` (above `f32::MAX` in magnitude),
+    /// so the layer would see an infinity.
+    OutOfF32 {
+        /// The value as written (CSV) or printed (NPY).
+        text: String,
+    },
+    /// A CSV file ends inside a quoted field (its closing quote is missing).
+    UnterminatedQuote,
+    /// A quoted CSV field has text after its closing quote (`"1"2`).
+    TextAfterQuote,
+    /// A CSV record is longer than [`MAX_RECORD_BYTES`](super::MAX_RECORD_BYTES).
+    RecordTooLong {
+        /// The limit, in bytes.
+        limit: usize,
+    },
+    /// A second pass over an input that can be read only once (a pipe, a FIFO).
+    ReadOnce,
     /// An objectness is NaN or outside `[0, 1]`.
     ObjectnessRange {
         /// The value as written (CSV) or printed (NPY).
@@ -115,6 +133,12 @@ pub enum DataErrorKind {
         found: Vec<u64>,
         /// What is accepted.
         expected: &'static str,
+    },
+    /// The NPY array's size in bytes (its shape times its element size) does not fit in
+    /// 64 bits.
+    NpyTooLarge {
+        /// The shape in the file.
+        shape: Vec<u64>,
     },
     /// The NPY file holds more or fewer data bytes than its header announces.
     NpySize {
@@ -181,7 +205,8 @@ impl fmt::Display for DataErrorKind {
             ),
             Self::ClassCount { found } => write!(
                 f,
-                "found {found} class column(s); between 2 and 65535 are needed"
+                "found {found} class column(s); between 2 and {} are needed",
+                super::MAX_CLASSES
             ),
             Self::FieldCount { expected, found } => {
                 write!(
@@ -192,6 +217,27 @@ impl fmt::Display for DataErrorKind {
             Self::MissingValue => f.write_str("the field is empty"),
             Self::NotANumber { text } => write!(f, "{text:?} is not a number"),
             Self::NotFinite { text } => write!(f, "{text:?} is not a finite number"),
+            Self::OutOfF32 { text } => write!(
+                f,
+                "{text:?} is out of range: a logit must be finite as a 32-bit float \
+                 (magnitude at most {:e})",
+                f32::MAX
+            ),
+            Self::UnterminatedQuote => {
+                f.write_str("a quoted field has no closing quote before the end of the file")
+            }
+            Self::TextAfterQuote => f.write_str(
+                "text follows the closing quote of a field; quote the whole field and \
+                 double the quotes inside it",
+            ),
+            Self::RecordTooLong { limit } => write!(
+                f,
+                "the record is longer than {limit} bytes, the limit of a CSV record"
+            ),
+            Self::ReadOnce => f.write_str(
+                "is not a regular file (a pipe or a FIFO): it can be read only once, and \
+                 this needs a second pass; save it to a file first",
+            ),
             Self::ObjectnessRange { text } => {
                 write!(f, "objectness {text:?} is not a number in [0, 1]")
             }
@@ -214,6 +260,10 @@ impl fmt::Display for DataErrorKind {
             Self::NpyShape { found, expected } => {
                 write!(f, "shape {found:?} is not {expected}")
             }
+            Self::NpyTooLarge { shape } => write!(
+                f,
+                "shape {shape:?} is too large: its size in bytes does not fit in 64 bits"
+            ),
             Self::NpySize { expected, found } => write!(
                 f,
                 "holds {found} data bytes but its header announces {expected} \
@@ -273,7 +323,7 @@ impl DataError {
     /// The same error in the column named `column`.
     #[must_use]
     pub fn in_column(mut self, column: impl Into<String>) -> Self {
-        self.0.column = Some(column.into());
+        self.0.column = Some(super::echo(&column.into()));
         self
     }
 

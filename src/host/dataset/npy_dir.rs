@@ -161,11 +161,11 @@ fn check_array(
         .map_err(|e| DataError::io(path, &e))?
         .len();
     let found = file_len.saturating_sub(header_len);
-    if expected != Some(found) {
-        return Err(bad(DataErrorKind::NpySize {
-            expected: expected.unwrap_or(u64::MAX),
-            found,
-        }));
+    let Some(expected) = expected else {
+        return Err(bad(DataErrorKind::NpyTooLarge { shape }));
+    };
+    if expected != found {
+        return Err(bad(DataErrorKind::NpySize { expected, found }));
     }
     let big_endian = match &dtype {
         DType::Plain(ts) => ts.endianness() == Endianness::Big,
@@ -215,6 +215,8 @@ fn class_names(dir: &Path, k: usize) -> Result<Vec<String>, DataError> {
     let bytes = std::fs::read(&path).map_err(|e| DataError::open(&path, &e))?;
     let text =
         String::from_utf8(bytes).map_err(|_| DataError::new(&path, DataErrorKind::NotUtf8))?;
+    // A byte-order mark is not part of the first name (as in CSV files).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut names: Vec<String> = text.lines().map(|l| l.trim().to_string()).collect();
     while names.last().is_some_and(String::is_empty) {
         names.pop();
@@ -424,7 +426,7 @@ impl Schema {
             [n, k] => (*n, usize::try_from(*k).unwrap_or(usize::MAX)),
             _ => (0, 0),
         };
-        if !(2..=usize::from(u16::MAX)).contains(&k) {
+        if !(2..=super::MAX_CLASSES).contains(&k) {
             return Err(DataError::new(
                 &logits_path,
                 DataErrorKind::ClassCount { found: k },
@@ -532,9 +534,8 @@ impl Schema {
             let Some(&v) = chunk.xs.get(i * k + c) else {
                 return Err(cols.logits.missing(index));
             };
-            if !v.is_finite() {
-                let text = std::format!("{v}");
-                let e = at(&self.logits.path, DataErrorKind::NotFinite { text });
+            if let Err(kind) = super::check_logit(v, || std::format!("{v}")) {
+                let e = at(&self.logits.path, kind);
                 return Err(e.in_column(classes.get(c).map_or("", String::as_str)));
             }
         }
@@ -611,7 +612,7 @@ impl Chunk {
         let bad_logits = self
             .xs
             .iter()
-            .fold(0u8, |bad, v| bad | u8::from(!v.is_finite()));
+            .fold(0u8, |bad, &v| bad | u8::from(!(v as f32).is_finite()));
         let bad_labels = self.ls.iter().fold(0u8, |bad, &v| {
             bad | u8::from(v < -1) | u8::from(v >= classes)
         });

@@ -81,6 +81,24 @@ pub enum FitError {
         /// Rows in the counts (pass (b)).
         counts: u64,
     },
+    /// The bin counts of one class cover another number of rows than the statistics
+    /// of that class (the totals may agree): the shards of pass (b) are not those of
+    /// pass (a).
+    ClassRowsDiffer {
+        /// The class.
+        class: String,
+        /// Rows of the class in the statistics (pass (a)).
+        stats: u64,
+        /// Rows of the class in the bin counts (pass (b)).
+        counts: u64,
+    },
+    /// The fitted statistics of one class (or Bayes category) break a table invariant.
+    ClassTable {
+        /// The class, or `background` for the Bayes head's background category.
+        class: String,
+        /// The invariant, as the layer reports it.
+        error: TableError,
+    },
     /// Serialized statistics or counts cannot be decoded.
     Format {
         /// What is wrong with the bytes.
@@ -94,7 +112,7 @@ impl FitError {
     pub fn is_bad_input(&self) -> bool {
         match self {
             Self::Data(e) => e.is_bad_input(),
-            Self::Changed { .. } | Self::Table(_) => false,
+            Self::Changed { .. } | Self::Table(_) | Self::ClassTable { .. } => false,
             Self::Param { .. }
             | Self::NoLabels { .. }
             | Self::EmptyClasses { .. }
@@ -104,6 +122,7 @@ impl FitError {
             | Self::ParamsDiffer
             | Self::EdgesDiffer
             | Self::RowsDiffer { .. }
+            | Self::ClassRowsDiffer { .. }
             | Self::Format { .. } => true,
         }
     }
@@ -160,6 +179,11 @@ impl fmt::Display for FitError {
                 path.display()
             ),
             Self::Table(e) => write!(f, "the fitted table is invalid: {e}"),
+            Self::ClassTable { class, error } => write!(
+                f,
+                "the fitted table is invalid: {}",
+                name_class(error, class)
+            ),
             Self::ClassesDiffer { ours, theirs } => write!(
                 f,
                 "statistics of classes [{}] cannot be combined with statistics of classes \
@@ -175,10 +199,24 @@ impl fmt::Display for FitError {
                 "the bin counts were made with the edges of other statistics; count every \
                  shard with the edges of the merged pass-(a) statistics",
             ),
+            Self::RowsDiffer { stats, counts } if stats == counts => write!(
+                f,
+                "the bin counts and the statistics both cover {stats} rows, but not the \
+                 same rows per class: the shards of pass (b) are not those of pass (a)"
+            ),
             Self::RowsDiffer { stats, counts } => write!(
                 f,
-                "the bin counts cover {counts} rows but the statistics {stats}: the shards of \
-                 pass (b) are not those of pass (a)"
+                "the bin counts cover {counts} rows but the statistics {stats} rows: the \
+                 shards of pass (b) are not those of pass (a)"
+            ),
+            Self::ClassRowsDiffer {
+                class,
+                stats,
+                counts,
+            } => write!(
+                f,
+                "the bin counts of class {class:?} cover {counts} rows but its statistics \
+                 {stats} rows: the shards of pass (b) are not those of pass (a)"
             ),
             Self::Format { reason } => write!(f, "not valid fit statistics: {reason}"),
         }
@@ -189,7 +227,7 @@ impl std::error::Error for FitError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Self::Data(e) => Some(e),
-            Self::Table(e) => Some(e),
+            Self::Table(e) | Self::ClassTable { error: e, .. } => Some(e),
             _ => None,
         }
     }
@@ -245,4 +283,42 @@ pub fn warnings(table: &DynTable) -> Vec<FitWarning> {
             mean: p.mean(),
         })
         .collect()
+}
+
+/// The class index a table error is about, if any.
+pub(crate) fn class_index(e: &TableError) -> Option<u16> {
+    match *e {
+        TableError::Edges { class, .. }
+        | TableError::Frequencies { class, .. }
+        | TableError::BinCount { class, .. }
+        | TableError::Mean { class }
+        | TableError::Variance { class }
+        | TableError::Name { class }
+        | TableError::DuplicateName { class }
+        | TableError::CategoryRows { class } => Some(class),
+        _ => None,
+    }
+}
+
+/// The layer's message for `e`, naming the class `name` where it gives an index.
+fn name_class(e: &TableError, name: &str) -> String {
+    let text = e.to_string();
+    let Some(i) = class_index(e) else {
+        return text;
+    };
+    let mut out = String::with_capacity(text.len() + name.len());
+    let mut rest = text.as_str();
+    for word in ["class ", "category "] {
+        let index = std::format!("{word}{i}");
+        if let Some(at) = rest.find(&index) {
+            let after = rest.get(at + index.len()..).unwrap_or_default();
+            if !after.starts_with(|c: char| c.is_ascii_digit()) {
+                out.push_str(rest.get(..at).unwrap_or_default());
+                out.push_str(&std::format!("{word}{name:?}"));
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out
 }

@@ -520,14 +520,19 @@ pub fn finish(stats: &FitStats, counts: &FitCounts) -> Result<DynTable, FitError
         c.iter().cloned().map(BinCounter::finish).collect()
     };
     let (ml, map) = (histograms(&counts.ml), histograms(&counts.map));
-    let same = stats
-        .moments
-        .iter()
-        .zip(&ml)
-        .zip(&map)
-        .all(|((m, a), b)| a.total() == m.count() && b.total() == m.count());
-    if !same {
-        return Err(rows_differ());
+    for ((m, a), b) in stats.moments.iter().zip(&ml).zip(&map) {
+        let counted = if a.total() == m.count() {
+            b.total()
+        } else {
+            a.total()
+        };
+        if counted != m.count() {
+            return Err(FitError::ClassRowsDiffer {
+                class: m.name().to_string(),
+                stats: m.count(),
+                counts: counted,
+            });
+        }
     }
     let table = build_table(&stats.moments, &ml, &map, params.settings())?;
     match (&counts.bayes, params.bayes) {

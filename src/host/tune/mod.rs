@@ -342,6 +342,11 @@ impl std::fmt::Display for TuneError {
 
 impl std::error::Error for TuneError {}
 
+/// The most candidates (bin count and lambda pairs, over every head) one search
+/// builds: about eight times the default grid (DESIGN §4). A larger grid is refused
+/// before anything is read ([`TuneParams::check_size`]).
+pub const MAX_CANDIDATES: usize = 20_000;
+
 /// Parses a bin-count set: `N`, `A..B` (inclusive) or `A,B,C`; every count >= 1.
 ///
 /// # Errors
@@ -399,7 +404,16 @@ fn log_grid(min: f64, max: f64, per_decade: usize, limit: f32) -> Result<Vec<f32
         ));
     }
     let decades = (max / min).log10();
-    let steps = (decades * per_decade as f64).round() as usize;
+    let steps = (decades * per_decade as f64).round();
+    if steps >= MAX_CANDIDATES as f64 {
+        return Err(format!(
+            "the lambda grid would hold {} lambdas ({decades:.3} decades at {per_decade} per \
+             decade); a search holds at most {MAX_CANDIDATES} candidates: give fewer lambdas \
+             per decade",
+            steps + 1.0
+        ));
+    }
+    let steps = steps as usize;
     let mut out: Vec<f32> = (0..=steps)
         .map(|s| {
             let t = if steps == 0 {

@@ -15,6 +15,7 @@ use crate::host::error::HostError;
 use crate::host::eval::{head_scores, Method};
 use crate::host::fit::{build_table, FitError, TrainingSet};
 use crate::host::metrics::{self, Metrics, MetricsConfig};
+use crate::host::names::Named;
 use crate::host::DynTable;
 use crate::{EdgeMode, Gaussian, Head, Histogram, Settings, UpperTail};
 
@@ -61,6 +62,31 @@ pub struct TuneParams {
 }
 
 impl TuneParams {
+    /// Refuses a grid of more than [`MAX_CANDIDATES`](super::MAX_CANDIDATES) candidates
+    /// over every head (DESIGN §4), before any is built.
+    ///
+    /// # Errors
+    ///
+    /// A message with the number of candidates of each head and the cap.
+    pub fn check_size(&self) -> Result<(), String> {
+        let heads = [Head::Ml, Head::Map, Head::Bayes];
+        let total: usize = heads.iter().map(|&h| self.candidates(h)).sum();
+        if total <= super::MAX_CANDIDATES {
+            return Ok(());
+        }
+        let each: Vec<String> = heads
+            .iter()
+            .filter(|&&h| self.candidates(h) > 0)
+            .map(|&h| std::format!("{} {}", h.name(), self.candidates(h)))
+            .collect();
+        Err(std::format!(
+            "the grid holds {total} candidates ({}: bin counts times lambdas); at most {} \
+             are searched: give fewer bin counts or fewer lambdas per decade",
+            each.join(", "),
+            super::MAX_CANDIDATES
+        ))
+    }
+
     /// Number of candidates searched for `head`.
     pub fn candidates(&self, head: Head) -> usize {
         if head == Head::Bayes {

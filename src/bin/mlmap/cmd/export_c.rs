@@ -25,7 +25,7 @@ pub struct ExportCArgs {
 }
 
 pub fn run(args: &ExportCArgs) -> Result<()> {
-    output::check_target(&args.output)?;
+    output::check_outputs(&args.output, &[&args.table])?;
     let bytes = fs::read(&args.table).map_err(|e| CliError::input(&args.table, e))?;
     let source = args.table.file_name().map_or_else(
         || args.table.display().to_string(),

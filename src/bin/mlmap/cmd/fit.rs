@@ -14,7 +14,7 @@ pub fn run(args: &FitArgs) -> Result<()> {
     let train = &args.train;
     params.validate().map_err(|e| fit_error(train, e))?;
     output::check_outputs(&args.output, &[train])?;
-    let src = data::open(train)?;
+    let src = data::open_twice(train)?;
     let table = fit::fit(&src, &params).map_err(|e| fit_error(train, e))?;
     for w in fit::warnings(&table) {
         eprintln!("mlmap: warning: {}: {w}", train.display());

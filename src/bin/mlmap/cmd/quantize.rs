@@ -25,6 +25,7 @@ pub struct QuantizeArgs {
         long,
         value_name = "S[,S...]",
         value_delimiter = ',',
+        value_parser = crate::args::f32_value,
         required = true,
         allow_negative_numbers = true
     )]

@@ -53,6 +53,7 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         tail: a.upper_tail,
         detail: a.top,
     };
+    params.check_size().map_err(CliError::Input)?;
     let mut inputs = vec![a.train.as_path(), a.val.as_path()];
     inputs.extend(a.ood.as_deref());
     output::check_outputs(&a.output, &inputs)?;
