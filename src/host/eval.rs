@@ -33,6 +33,8 @@ pub enum Method {
     Map,
     /// The layer's Bayes head (DESIGN §1.6), when the table has one.
     Bayes,
+    /// The layer's open head (DESIGN §1.8), when the table has one.
+    Open,
 }
 
 impl Named for Method {
@@ -56,18 +58,20 @@ impl Named for Method {
         Name::new(Self::Ml, "ml", "The layer's ML head"),
         Name::new(Self::Map, "map", "The layer's MAP head"),
         Name::new(Self::Bayes, "bayes", "The layer's Bayes head"),
+        Name::new(Self::Open, "open", "The layer's open head"),
     ];
 }
 
 impl Method {
     /// Every method, in report order.
-    pub const ALL: [Self; 6] = [
+    pub const ALL: [Self; 7] = [
         Self::Sigmoid,
         Self::Softmax,
         Self::Temperature,
         Self::Ml,
         Self::Map,
         Self::Bayes,
+        Self::Open,
     ];
 
     /// The layer head behind the method, if it is one.
@@ -77,6 +81,7 @@ impl Method {
             Self::Ml => Some(Head::Ml),
             Self::Map => Some(Head::Map),
             Self::Bayes => Some(Head::Bayes),
+            Self::Open => Some(Head::Open),
         }
     }
 
@@ -117,7 +122,8 @@ pub fn head_scores(
         for (d, &v) in x.iter_mut().zip(xs) {
             *d = v as f32;
         }
-        // Each head with the device's default backend (`Table::ml`, `map`, `bayes`).
+        // Each head with the device's default backend (`Table::ml`, `map`, `bayes`,
+        // `open`).
         let scored = view.score_into(head, &x, os as f32, &mut s, &mut scratch);
         scored.map_err(|e| HostError::Input(std::format!("{}: {e}", at(path, *loc))))?;
         out.extend(s.iter().map(|&v| f64::from(v)));
@@ -132,7 +138,7 @@ fn baseline(b: Baseline, d: &Loaded, k: usize, path: &Path) -> Result<Vec<f64>, 
 }
 
 /// The scores of `method` on `data`; `None` for the temperature baseline without a
-/// fitted temperature and for the Bayes head of a table without one.
+/// fitted temperature and for the Bayes or open head of a table without one.
 fn method_scores(
     method: Method,
     table: &DynTable,
@@ -152,6 +158,8 @@ fn method_scores(
         Method::Map => return head_scores(table, Head::Map, data, path).map(Some),
         Method::Bayes if table.bayes().is_none() => return Ok(None),
         Method::Bayes => return head_scores(table, Head::Bayes, data, path).map(Some),
+        Method::Open if table.open().is_none() => return Ok(None),
+        Method::Open => return head_scores(table, Head::Open, data, path).map(Some),
     };
     baseline(b, data, k, path).map(Some)
 }
@@ -377,7 +385,15 @@ mod tests {
         let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
         assert_eq!(
             names,
-            ["sigmoid", "softmax", "temperature", "ml", "map", "bayes"]
+            [
+                "sigmoid",
+                "softmax",
+                "temperature",
+                "ml",
+                "map",
+                "bayes",
+                "open"
+            ]
         );
         let titles: Vec<String> = Method::ALL.iter().map(|m| m.title()).collect();
         assert_eq!(

@@ -176,6 +176,11 @@ impl Named for Head {
         Name::new(Self::Ml, "ml", "The maximum-likelihood head"),
         Name::new(Self::Map, "map", "The maximum a-posteriori head"),
         Name::new(Self::Bayes, "bayes", "The Bayes head over every logit"),
+        Name::new(
+            Self::Open,
+            "open",
+            "The detector's softmax at a temperature, times the probability of a known object",
+        ),
     ];
 }
 

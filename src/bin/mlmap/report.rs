@@ -203,18 +203,36 @@ pub fn candidates(
                 "  no candidate is within the accuracy and mAP guards: chose the one that loses least"
             );
         }
+        // The open head: its Bayes head is fixed, the search is over epsilon at one
+        // temperature.
+        let open = h.head == mlmap::Head::Open;
+        if let Some(t) = cands.first().and_then(|c| c.temperature) {
+            let _ = writeln!(
+                s,
+                "  temperature {t} (fitted by NLL on the validation rows), Bayes head as chosen"
+            );
+        }
+        let (col_a, col_b) = if open {
+            ("", "epsilon")
+        } else {
+            ("bins", "lambda")
+        };
         let _ = writeln!(
             s,
             "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9}",
-            "rank", "bins", "lambda", "ece", "nll", "brier", "accuracy", "mAP"
+            "rank", col_a, col_b, "ece", "nll", "brier", "accuracy", "mAP"
         );
         for (i, c) in cands.iter().take(top).enumerate() {
+            let (a, b) = match (open, c.epsilon) {
+                (true, Some(e)) => (String::new(), e),
+                _ => (c.bins.to_string(), c.lambda),
+            };
             let _ = writeln!(
                 s,
                 "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9} {:>9} {:>9}{}",
                 i + 1,
-                c.bins,
-                c.lambda,
+                a,
+                b,
                 fmt_opt(c.ece),
                 fmt_opt(c.nll),
                 fmt_opt(c.brier),
@@ -308,7 +326,7 @@ pub fn comparison(c: &Comparison, objective: Objective) -> String {
 
 /// One candidate in JSON, values at full precision.
 fn candidate_json(c: &Candidate) -> serde_json::Value {
-    serde_json::json!({
+    let mut v = serde_json::json!({
         "bins": c.bins,
         "lambda": c.lambda,
         "objective": finite(c.objective),
@@ -318,7 +336,12 @@ fn candidate_json(c: &Candidate) -> serde_json::Value {
         "accuracy": c.accuracy,
         "mean_ap": c.mean_ap,
         "within_guards": c.eligible(),
-    })
+    });
+    if let (Some(o), Some(t), Some(e)) = (v.as_object_mut(), c.temperature, c.epsilon) {
+        o.insert("temperature".into(), serde_json::json!(t));
+        o.insert("epsilon".into(), serde_json::json!(e));
+    }
+    v
 }
 
 /// A finite number, or null.
@@ -378,6 +401,10 @@ pub fn tune_json(
         if let Some(ch) = &m.chosen {
             o.insert("bins".into(), ch.bins.into());
             o.insert("lambda".into(), serde_json::json!(ch.lambda));
+            if let (Some(t), Some(e)) = (ch.temperature, ch.epsilon) {
+                o.insert("temperature".into(), serde_json::json!(t));
+                o.insert("epsilon".into(), serde_json::json!(e));
+            }
             o.insert("within_guards".into(), (m.excess == 0.0).into());
         }
         methods.insert(m.method.name().to_string(), o.into());
@@ -433,6 +460,19 @@ pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
         }
         None => {
             let _ = writeln!(s, "  Bayes none");
+        }
+    }
+    match table.open() {
+        Some(o) => {
+            let _ = writeln!(
+                s,
+                "  open  temperature {}, epsilon {:e}",
+                o.temperature(),
+                o.epsilon()
+            );
+        }
+        None => {
+            let _ = writeln!(s, "  open  none");
         }
     }
     let rows: Vec<String> = table

@@ -144,6 +144,7 @@ pub(super) fn method_color(method: &str) -> RGBColor {
         "ml" => RGBColor(0, 114, 178),
         "map" => RGBColor(0, 158, 115),
         "bayes" => RGBColor(0, 0, 0),
+        "open" => RGBColor(86, 180, 233),
         other => {
             const OTHERS: [RGBColor; 3] = [
                 RGBColor(86, 180, 233),

@@ -10,7 +10,9 @@
 //! the scores the layer will produce with the written table. The objective is
 //! accumulated on the fly by the metrics module's [`Accumulator`], without storing
 //! scores. A Bayes candidate is scored by the layer itself, from a table holding that
-//! candidate's head ([`search_bayes`]).
+//! candidate's head ([`search_bayes`]); so is an open-head candidate, once the Bayes head
+//! is chosen: the temperature is fitted by NLL, then `epsilon` searched
+//! ([`search_open`]).
 //!
 //! Every candidate also gets its top-1 accuracy and mAP, and [`Guards`] keep a
 //! candidate that loses more of either than allowed against softmax
@@ -20,12 +22,14 @@
 //! set and a validation file and builds the table of the best candidates.
 
 mod bayes;
+mod open;
 mod pipeline;
 
 use std::prelude::rust_2021::*;
 use std::{format, vec};
 
 pub use self::bayes::{search_bayes, BayesSearchParams};
+pub use self::open::{epsilon_grid, search_open, OpenSearchParams};
 pub use self::pipeline::{tune, BayesGrid, Compared, Comparison, TuneParams, Tuned};
 use crate::host::metrics::{Accumulator, Metrics, MetricsConfig, Parts};
 use crate::host::names::{Name, Named};
@@ -188,10 +192,15 @@ pub struct ValRows<'a> {
 /// One scored grid point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Candidate {
-    /// Bin count.
+    /// Bin count (for the open head: its Bayes head's).
     pub bins: usize,
-    /// Smoothing lambda (as stored in the table, `f32`).
+    /// Smoothing lambda (as stored in the table, `f32`; for the open head: its Bayes
+    /// head's).
     pub lambda: f32,
+    /// The open head's temperature; `None` for the other heads.
+    pub temperature: Option<f32>,
+    /// The open head's `epsilon`; `None` for the other heads.
+    pub epsilon: Option<f32>,
     /// The objective's value (lower is better; a missing NLL counts as +inf).
     pub objective: f64,
     /// How much more accuracy or mAP than [`Guards`] allow the candidate loses against
@@ -257,6 +266,8 @@ impl Judge {
             return Candidate {
                 bins,
                 lambda,
+                temperature: None,
+                epsilon: None,
                 objective: f64::INFINITY,
                 excess: f64::INFINITY,
                 ece: None,
@@ -276,6 +287,8 @@ impl Judge {
         Candidate {
             bins,
             lambda,
+            temperature: None,
+            epsilon: None,
             objective: value.unwrap_or(f64::INFINITY),
             excess: self.guards.excess(accuracy, mean_ap, &self.reference),
             ece,
@@ -288,13 +301,15 @@ impl Judge {
 }
 
 /// The order of candidates: eligible first, then the smaller excess, the objective,
-/// fewer bins and the smaller lambda.
+/// fewer bins, the smaller lambda and the smaller `epsilon`.
 fn order(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
+    let eps = |c: &Candidate| c.epsilon.unwrap_or(0.0);
     a.excess
         .total_cmp(&b.excess)
         .then(a.objective.total_cmp(&b.objective))
         .then(a.bins.cmp(&b.bins))
         .then(a.lambda.total_cmp(&b.lambda))
+        .then(eps(a).total_cmp(&eps(b)))
 }
 
 /// Runs `f` on every item of `work`, the items shared among the machine's cores;
@@ -690,6 +705,8 @@ mod tests {
         let c = |excess: f64, objective: f64| Candidate {
             bins: 4,
             lambda: 1.0,
+            temperature: None,
+            epsilon: None,
             objective,
             excess,
             ece: None,

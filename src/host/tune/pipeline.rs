@@ -6,8 +6,8 @@ use std::path::Path;
 use std::prelude::rust_2021::*;
 
 use super::{
-    search, search_bayes, BayesSearchParams, Candidate, Guards, Judge, Objective, Reference,
-    SearchParams, TuneError, TuneResult, ValRows,
+    search, search_bayes, search_open, BayesSearchParams, Candidate, Guards, Judge, Objective,
+    OpenSearchParams, Reference, SearchParams, TuneError, TuneResult, ValRows,
 };
 use crate::host::baselines::{self, Baseline, Rows};
 use crate::host::data::{check_classes, Loaded};
@@ -37,6 +37,7 @@ pub struct BayesGrid {
 /// | `bins` | bin counts to try per head; the table needs a candidate of `ML` and `MAP` |
 /// | `lambdas` | smoothing values to try for ML and MAP (e.g. from [`lambda_grid`](super::lambda_grid)) |
 /// | `bayes` | the Bayes head's grid; `None` leaves the head out of the table |
+/// | `epsilons` | the open head's `epsilon` grid (e.g. [`epsilon_grid`](super::epsilon_grid)), searched with the Bayes head; empty: the untuned open head (`T = 1`, `epsilon = 0`) |
 /// | `objective` | what to minimise on the validation set |
 /// | `guards` | how much accuracy and mAP a chosen candidate may lose against softmax |
 /// | `edges`, `tail` | the fit's edge placement and tail policy |
@@ -49,6 +50,8 @@ pub struct TuneParams {
     pub lambdas: Vec<f32>,
     /// The Bayes head's grid, or `None` for a table without that head.
     pub bayes: Option<BayesGrid>,
+    /// The open head's `epsilon` grid (searched when the Bayes head is).
+    pub epsilons: Vec<f32>,
     /// What to minimise.
     pub objective: Objective,
     /// The allowed losses against softmax.
@@ -69,7 +72,7 @@ impl TuneParams {
     ///
     /// A message with the number of candidates of each head and the cap.
     pub fn check_size(&self) -> Result<(), String> {
-        let heads = [Head::Ml, Head::Map, Head::Bayes];
+        let heads = [Head::Ml, Head::Map, Head::Bayes, Head::Open];
         let total: usize = heads.iter().map(|&h| self.candidates(h)).sum();
         if total <= super::MAX_CANDIDATES {
             return Ok(());
@@ -94,6 +97,13 @@ impl TuneParams {
                 .bayes
                 .as_ref()
                 .map_or(0, |g| g.bins.len() * g.lambdas.len());
+        }
+        if head == Head::Open {
+            return if self.bayes.is_some() {
+                self.epsilons.len()
+            } else {
+                0
+            };
         }
         self.bins
             .iter()
@@ -324,6 +334,35 @@ pub fn tune(
         let chosen = best(&result, Head::Bayes)?;
         let counts = train.bayes_counts(chosen.bins).map_err(fit)?;
         table = crate::host::fit::with_bayes(table, &counts, chosen.lambda).map_err(fit)?;
+        if !params.epsilons.is_empty() {
+            // The temperature as the baseline fits it: by NLL on the labelled
+            // validation rows (1 when there is none to fit it on).
+            let fit_rows = Rows::new(
+                &val.logits,
+                k,
+                rows.labels.get(..val.len()).unwrap_or(&[]),
+                &val.objectness,
+            )
+            .map_err(|e| HostError::input(val_path, e))?;
+            let temperature = baselines::fit_temperature_detailed(&fit_rows)
+                .map_or(crate::host::fit::UNTUNED_TEMPERATURE, |f| f.t as f32)
+                .clamp(crate::MIN_TEMPERATURE, crate::MAX_TEMPERATURE);
+            let open_params = OpenSearchParams {
+                val: val_rows,
+                table: &table,
+                temperature,
+                epsilons: &params.epsilons,
+                judge,
+                detail: params.detail,
+            };
+            result
+                .heads
+                .push(search_open(&open_params).map_err(map_err)?);
+            let chosen = best(&result, Head::Open)?;
+            table = table
+                .with_open(temperature, chosen.epsilon.unwrap_or(0.0))
+                .map_err(|e| HostError::fit(train.path(), FitError::Table(e)))?;
+        }
     }
     let comparison = compare(
         &table, &result, &rows, val, val_path, ood, softmax, softmax_m, judge,
@@ -370,9 +409,11 @@ fn compare(
         let temperature = score_baseline(Baseline::Temperature(t), rows, k).map_err(&fail)?;
         methods.push((Method::Temperature, temperature, None));
     }
-    for method in [Method::Ml, Method::Map, Method::Bayes] {
+    for method in [Method::Ml, Method::Map, Method::Bayes, Method::Open] {
         let Some(head) = method.head() else { continue };
-        if head == Head::Bayes && table.bayes().is_none() {
+        if (head == Head::Bayes && table.bayes().is_none())
+            || (head == Head::Open && table.open().is_none())
+        {
             continue;
         }
         let mut scores = head_scores(table, head, val, val_path)?;

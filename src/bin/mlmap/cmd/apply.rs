@@ -7,8 +7,9 @@ use std::fmt::Write as _;
 use mlmap::host::data::{self, at, check_classes};
 use mlmap::host::dataset::Label;
 use mlmap::host::metrics::decision;
+use mlmap::host::names::Named as _;
 use mlmap::host::DynQTable;
-use mlmap::{code_range, dequantize, FastMath, Head, Libm};
+use mlmap::{code_range, dequantize, Head};
 
 use crate::args::ApplyArgs;
 use crate::error::{CliError, Result};
@@ -37,12 +38,17 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
     check_classes(&args.input, src.classes(), table.class_names())?;
     let names: Vec<&str> = table.class_names().collect();
     let k = names.len();
-    // The Bayes head's columns only when the table (or the quantized section) has it;
-    // its scratch holds one float per category.
-    let bayes_cats = match &quantized {
-        Some(q) if !q.has_bayes() => None,
-        _ => table.bayes().map(|b| b.categories()),
-    };
+    // The heads the table (or its quantized section) has, in column order: ML and MAP
+    // always, Bayes and open when present (the open head is built on the Bayes head).
+    let mut heads = vec![Head::Ml, Head::Map];
+    let section_has_bayes = quantized.as_ref().is_none_or(DynQTable::has_bayes);
+    if table.bayes().is_some() && section_has_bayes {
+        heads.push(Head::Bayes);
+        if table.open().is_some() {
+            heads.push(Head::Open);
+        }
+    }
+    let view = table.view();
     let mut codes = vec![0i32; k];
     let out_path = &args.output;
     let csv_err = |e: csv::Error| CliError::internal(out_path, format!("cannot write: {e}"));
@@ -55,23 +61,20 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
         if src.has_labels() {
             header.push("label".into());
         }
-        header.extend(names.iter().map(|n| format!("ml_{n}")));
-        header.extend(names.iter().map(|n| format!("map_{n}")));
-        if bayes_cats.is_some() {
-            header.extend(names.iter().map(|n| format!("bayes_{n}")));
+        for &head in &heads {
+            let prefix = head.name();
+            header.extend(names.iter().map(|n| format!("{prefix}_{n}")));
         }
-        header.push("ml_pred".into());
-        header.push("map_pred".into());
-        if bayes_cats.is_some() {
-            header.push("bayes_pred".into());
+        for &head in &heads {
+            header.push(format!("{}_pred", head.name()));
         }
         csv.write_record(&header).map_err(csv_err)?;
         let mut x = vec![0.0f32; k];
-        let mut ml = vec![0.0f32; k];
-        let mut map = vec![0.0f32; k];
-        let mut scratch = vec![0.0f32; k];
-        let mut bayes = vec![0.0f32; if bayes_cats.is_some() { k } else { 0 }];
-        let mut bayes_scratch = vec![0.0f32; bayes_cats.unwrap_or(0)];
+        // One row of K scores per head, in `heads` order; scratch for the largest head
+        // (one float per Bayes category).
+        let mut scores = vec![0.0f32; k * heads.len()];
+        let cats = table.bayes().map_or(k, |b| b.categories());
+        let mut scratch = vec![0.0f32; cats.max(k)];
         // Fields are written one by one, numbers through one reused buffer: no
         // allocation per row.
         let mut number = String::new();
@@ -99,24 +102,17 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
                     let (s, z) = q.params(i).unwrap_or((1.0, 0));
                     *d = dequantize(c, s, z);
                 }
-                q.score_into(Head::Ml, &codes, os, &mut ml).map_err(at)?;
-                q.score_into(Head::Map, &codes, os, &mut map).map_err(at)?;
-                if bayes_cats.is_some() {
-                    q.score_into(Head::Bayes, &codes, os, &mut bayes)
-                        .map_err(at)?;
+                for (&head, out) in heads.iter().zip(scores.chunks_exact_mut(k)) {
+                    q.score_into(head, &codes, os, out).map_err(at)?;
                 }
             } else {
                 for (d, &s) in x.iter_mut().zip(row.logits) {
                     *d = s as f32;
                 }
-                table.ml_into(&x, os, &mut ml, &mut scratch).map_err(at)?;
-                table
-                    .map_into::<Libm>(&x, os, &mut map, &mut scratch)
-                    .map_err(at)?;
-                if bayes_cats.is_some() {
-                    // The device's default backend for this head (`Table::bayes`).
-                    table
-                        .bayes_into::<FastMath>(&x, os, &mut bayes, &mut bayes_scratch)
+                // Each head with the device's default backend (`Table::ml`, `map`,
+                // `bayes`, `open`).
+                for (&head, out) in heads.iter().zip(scores.chunks_exact_mut(k)) {
+                    view.score_into(head, &x, os, out, &mut scratch)
                         .map_err(at)?;
                 }
             }
@@ -131,18 +127,13 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
                 };
                 csv.write_field(label).map_err(csv_err)?;
             }
-            for v in ml.iter().chain(&map).chain(&bayes) {
+            for v in &scores {
                 number.clear();
                 let _ = write!(number, "{v}");
                 csv.write_field(&number).map_err(csv_err)?;
             }
-            let heads: &[&Vec<f32>] = if bayes_cats.is_some() {
-                &[&ml, &map, &bayes]
-            } else {
-                &[&ml, &map]
-            };
-            for scores in heads {
-                let pred = names.get(decision(scores, &x)).copied().unwrap_or("");
+            for head_scores in scores.chunks_exact(k) {
+                let pred = names.get(decision(head_scores, &x)).copied().unwrap_or("");
                 csv.write_field(pred).map_err(csv_err)?;
             }
             csv.write_record(None::<&[u8]>).map_err(csv_err)?;

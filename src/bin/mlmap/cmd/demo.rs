@@ -118,6 +118,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
             bins: vec![22],
             lambdas: lambdas.clone(),
         }),
+        epsilons: tune::epsilon_grid(),
         lambdas,
         guards,
         objective: Objective::Ece,

@@ -47,6 +47,7 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         bins: vec![(Head::Ml, bins_ml), (Head::Map, bins_map)],
         lambdas,
         bayes: bayes_grid(a)?,
+        epsilons: tune::epsilon_grid(),
         objective: a.objective,
         guards,
         edges: a.edges,
