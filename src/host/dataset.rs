@@ -250,36 +250,34 @@ impl DataSource {
     }
 }
 
-/// Checks a list of class names (DESIGN §2 and the table's name rules); `error` builds
-/// the error for name `i` (`usize::MAX` when no single name is at fault). Returns the
-/// name-to-index map.
-fn check_class_names(
+/// Checks a list of class names against the rule of DESIGN §2 and §6.15: between 2 and
+/// 65535 names, each passing [`check_class_name`](crate::check_class_name), none twice.
+/// `error` builds the error for name `i` (`usize::MAX` when no single name is at
+/// fault). Returns the name-to-index map.
+///
+/// # Errors
+///
+/// The error `error` builds for the first name at fault, of the kind
+/// [`DataErrorKind::of_name`] gives.
+pub fn check_class_names<E>(
     names: &[String],
-    error: impl Fn(usize, DataErrorKind) -> DataError,
-) -> Result<HashMap<String, usize>, DataError> {
+    error: impl Fn(usize, DataErrorKind) -> E,
+) -> Result<HashMap<String, usize>, E> {
     if names.len() < 2 || names.len() > usize::from(u16::MAX) {
         return Err(error(
             usize::MAX,
             DataErrorKind::ClassCount { found: names.len() },
         ));
     }
-    let mut index = HashMap::with_capacity(names.len());
+    let mut index: HashMap<String, usize> = HashMap::with_capacity(names.len());
     for (i, name) in names.iter().enumerate() {
-        if name.is_empty() {
-            return Err(error(i, DataErrorKind::EmptyColumnName { index: i + 1 }));
+        crate::check_class_name(name).map_err(|e| error(i, DataErrorKind::of_name(i, name, e)))?;
+        if let Some(&first) = index.get(name) {
+            let first = u16::try_from(first).unwrap_or(u16::MAX);
+            let repeated = crate::NameError::Repeated { first };
+            return Err(error(i, DataErrorKind::of_name(i, name, repeated)));
         }
-        if name == "background" {
-            return Err(error(i, DataErrorKind::ReservedClassName));
-        }
-        if name.len() > crate::NAME_MAX {
-            return Err(error(
-                i,
-                DataErrorKind::ClassNameTooLong { len: name.len() },
-            ));
-        }
-        if index.insert(name.clone(), i).is_some() {
-            return Err(error(i, DataErrorKind::DuplicateColumn));
-        }
+        index.insert(name.clone(), i);
     }
     Ok(index)
 }
