@@ -460,6 +460,5 @@ mod tests {
                 "{list:?}"
             );
         }
-        assert!(NAME_RULE_VERSION > crate::FORMAT_VERSION);
     }
 }

@@ -258,6 +258,14 @@ impl RowSource for Loaded {
     }
 }
 
+/// Names joined by `, `, each made [`visible`](crate::host::escape::visible).
+fn list<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    names
+        .map(crate::host::escape::visible)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Refuses data whose classes differ from the table's (names and order).
 ///
 /// # Errors
@@ -274,8 +282,8 @@ pub fn check_classes<'a>(
             path,
             std::format!(
                 "its classes [{}] differ from the table's [{}] (same names, same order needed)",
-                data.join(", "),
-                table.join(", ")
+                list(data.iter().map(String::as_str)),
+                list(table.iter().copied())
             ),
         ));
     }

@@ -40,6 +40,10 @@ mod quantize;
 /// the table's bytes, escapes class names and takes only a safe `--name`.
 mod export_c;
 
+/// Class names at every reader and writer: unprintable names refused with the rule
+/// they break, names of older tables escaped on the terminal, CSV quoting.
+mod names;
+
 /// `inspect`: the text and JSON reports of a table; stdout closed early or failing.
 mod inspect;
 
