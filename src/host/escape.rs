@@ -13,7 +13,7 @@ use std::string::String;
 use crate::refused_char;
 
 /// `name` with every character the name rule refuses
-/// ([`refused_char`](crate::refused_char): control, invisible and bidirectional
+/// ([`refused_char`]: control, invisible and bidirectional
 /// formatting characters, separators other than the space, private-use characters and
 /// noncharacters) written as a Rust escape: `\n`, `\r`, `\t`, `\0`, or `\u{..}` with
 /// the code point in hexadecimal. When anything is escaped, a backslash of the name is

@@ -7,7 +7,7 @@
 //! before including it also defines the array, so the program holds one copy. It
 //! compiles as C99 and later and as C++11 and later, warning-free under `-pedantic
 //! -Wall -Wextra`. Class names appear only in its opening comment, escaped by
-//! [`c_comment`](super::escape::c_comment).
+//! [`c_comment`].
 
 use std::borrow::ToOwned;
 use std::fmt::{self, Write as _};
@@ -267,7 +267,7 @@ pub const C_ARRAY_ALIGN: usize = 8;
 /// first) as the array `const uint8_t NAME[NAME_LEN]`, aligned to [`C_ARRAY_ALIGN`]
 /// bytes, with the length as the macro `NAME_LEN` (upper case) and, in a comment, the
 /// length, the CRC-32, the shape and the class names (escaped by
-/// [`c_comment`](super::escape::c_comment)). `source` names the file the bytes came
+/// [`c_comment`]). `source` names the file the bytes came
 /// from, in that comment.
 ///
 /// The header declares the array; the translation unit that defines
@@ -280,7 +280,7 @@ pub const C_ARRAY_ALIGN: usize = 8;
 /// let h = mlmap::host::export::c_header(bytes, "calib_table", "default.mlmap")?;
 /// assert!(h.contains("#define CALIB_TABLE_LEN 1696u"));
 /// assert!(h.contains("extern const uint8_t calib_table[CALIB_TABLE_LEN];"));
-/// assert!(h.contains("#ifdef CALIB_TABLE_IMPLEMENTATION"));
+/// assert!(h.contains("#if defined(CALIB_TABLE_IMPLEMENTATION)"));
 /// # Ok::<(), mlmap::host::export::ExportError>(())
 /// ```
 ///
