@@ -3,8 +3,8 @@
 //! the matching error.
 
 use mlmap::{
-    DecodeError, EncodeError, Head, Table, TableError, UpperTail, MAX_LAMBDA, MAX_LAMBDA_BAYES,
-    NAME_MAX,
+    CharKind, DecodeError, EncodeError, Head, NameError, Table, TableError, UpperTail, MAX_LAMBDA,
+    MAX_LAMBDA_BAYES, NAME_MAX,
 };
 
 use crate::support::{
@@ -410,11 +410,15 @@ fn each_broken_invariant_has_its_error() {
             );
         }
         let long = vec![b'x'; NAME_MAX + 1];
-        for name in [&b""[..], b"background", &long] {
+        for (name, error) in [
+            (&b""[..], NameError::Empty),
+            (b"background", NameError::Reserved),
+            (&long, NameError::TooLong),
+        ] {
             assert_broken(
                 &format!("name {:?} of class {class}", String::from_utf8_lossy(name)),
                 |r| r.classes[c].name = name.to_vec(),
-                Invalid(Name { class }),
+                Invalid(Name { class, error }),
             );
         }
         // Not UTF-8: the body does not follow the format.
@@ -473,6 +477,77 @@ fn each_broken_invariant_has_its_error() {
     raw.upper_tail = 1;
     let t = Small::from_bytes(&raw.encode()).unwrap();
     assert_eq!(t.class_name(0).map(str::len), Some(NAME_MAX));
+}
+
+/// Names that break the rule of DESIGN §6.15 but that a table of format version 1 or 2
+/// may hold: such files keep decoding (in a fixed-size and in a host table), while no
+/// table holding one can be built, so no new file holds one.
+#[test]
+fn old_tables_keep_names_new_tables_refuse() {
+    use TableError::Name;
+    let ch = |ch, at, kind| NameError::Char { ch, at, kind };
+    let hostile: [(&str, NameError); 6] = [
+        ("a\nb", ch('\n', 1, CharKind::Control)),
+        ("\u{1b}[2J", ch('\u{1b}', 0, CharKind::Control)),
+        ("nul\0", ch('\0', 3, CharKind::Control)),
+        ("rac\u{202E}", ch('\u{202E}', 3, CharKind::Invisible)),
+        ("a\u{2029}b", ch('\u{2029}', 1, CharKind::Separator)),
+        ("car ", NameError::Padded),
+    ];
+    for (name, error) in hostile {
+        for version_2 in [false, true] {
+            let mut raw = if version_2 {
+                RawTable::small_bayes()
+            } else {
+                RawTable::small()
+            };
+            raw.classes[1].name = name.as_bytes().to_vec();
+            let bytes = raw.encode();
+            assert_eq!(bytes[4], 1 + u8::from(version_2));
+            let decoded = if version_2 {
+                SmallBayes::from_bytes(&bytes).map(|t| t.class_name(1).map(str::to_owned))
+            } else {
+                Small::from_bytes(&bytes).map(|t| t.class_name(1).map(str::to_owned))
+            };
+            assert_eq!(decoded, Ok(Some(name.to_owned())), "{name:?}");
+            #[cfg(feature = "std")]
+            {
+                let d = mlmap::host::DynTable::from_bytes(&bytes).unwrap();
+                assert_eq!(d.class_names().nth(1), Some(name));
+                // Re-encoding the decoded table gives the same file back.
+                assert_eq!(d.to_vec().unwrap(), bytes);
+            }
+        }
+        let mut specs = small_specs();
+        specs[1].name = name;
+        assert_eq!(
+            Small::from_parts(small_settings(UpperTail::Zero), specs),
+            Err(Name { class: 1, error }),
+            "{name:?}"
+        );
+        #[cfg(feature = "std")]
+        {
+            let classes = small_specs()
+                .into_iter()
+                .enumerate()
+                .map(|(i, c)| mlmap::ClassSpec {
+                    name: if i == 1 { name } else { c.name },
+                    ml_freqs: c.ml_freqs.to_vec(),
+                    map_freqs: c.map_freqs.to_vec(),
+                    rows: c.rows,
+                    mean: c.mean,
+                    variance: c.variance,
+                    ml_range: c.ml_range,
+                    map_range: c.map_range,
+                })
+                .collect();
+            assert_eq!(
+                mlmap::host::DynTable::new(small_settings(UpperTail::Zero), classes).err(),
+                Some(Name { class: 1, error }),
+                "{name:?}"
+            );
+        }
+    }
 }
 
 /// `ClassCount` is the host decoder's: a fixed-size table has its K in its type.

@@ -4,8 +4,9 @@
 use defmt::{write, Format, Formatter};
 
 use crate::{
-    BatchError, ClassName, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head,
-    Histogram, HistogramError, InferError, Scores, Settings, Table, TableError, UpperTail,
+    BatchError, CharKind, ClassName, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError,
+    Head, Histogram, HistogramError, InferError, NameError, Scores, Settings, Table, TableError,
+    UpperTail,
 };
 
 impl Format for Head {
@@ -34,13 +35,40 @@ impl Format for TableError {
             Self::Mean { class } => write!(f, "prior of class {}: bad mean", class),
             Self::Variance { class } => write!(f, "prior of class {}: bad variance", class),
             Self::Lambda { head } => write!(f, "{} lambda out of range", head),
-            Self::Name { class } => write!(f, "name of class {} invalid", class),
+            Self::Name { class, error } => write!(f, "name of class {}: {}", class, error),
             Self::DuplicateName { class } => write!(f, "name of class {} repeated", class),
             Self::ClassCount => write!(f, "class count out of range"),
             Self::CategoryRows { class } => write!(f, "Bayes category {} has no rows", class),
             Self::BayesShape => write!(f, "Bayes head shape inconsistent"),
             Self::Temperature => write!(f, "open head: temperature out of range"),
             Self::Epsilon => write!(f, "open head: epsilon out of range"),
+        }
+    }
+}
+
+impl Format for NameError {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::Empty => write!(f, "empty"),
+            Self::TooLong => write!(f, "too long"),
+            Self::Reserved => write!(f, "reserved"),
+            Self::Char { ch, at, kind } => {
+                write!(f, "{} U+{:04X} at byte {}", kind, u32::from(ch), at)
+            }
+            Self::Padded => write!(f, "starts or ends with a space"),
+            Self::Repeated { first } => write!(f, "repeats class {}", first),
+        }
+    }
+}
+
+impl Format for CharKind {
+    fn format(&self, f: Formatter<'_>) {
+        match self {
+            Self::Control => write!(f, "control character"),
+            Self::Invisible => write!(f, "invisible character"),
+            Self::Separator => write!(f, "separator"),
+            Self::PrivateUse => write!(f, "private-use character"),
+            Self::Noncharacter => write!(f, "noncharacter"),
         }
     }
 }

@@ -155,10 +155,20 @@ impl DynTable {
     ///
     /// # Errors
     ///
+    /// [`TableError::Name`] when a class name breaks the rule of DESIGN §6.15 (a table
+    /// decoded from a version-1 or version-2 file may hold one);
     /// [`TableError::BayesShape`] for a table without a Bayes head (the open head is
     /// built on it); [`TableError::Temperature`] or [`TableError::Epsilon`] for a
     /// parameter out of range.
     pub fn with_open(mut self, temperature: f32, epsilon: f32) -> Result<Self, TableError> {
+        // A version-3 file holds only names of the rule of DESIGN §6.15: a table decoded
+        // from an older file with another name cannot become one.
+        crate::name::check_class_names(self.names.iter().map(ClassName::as_str)).map_err(
+            |(i, error)| TableError::Name {
+                class: u16::try_from(i).unwrap_or(u16::MAX),
+                error,
+            },
+        )?;
         let k = self.k();
         let b = self.bayes.as_mut().ok_or(TableError::BayesShape)?;
         let bins = b.axes.first().map_or(0, Axis::bins);

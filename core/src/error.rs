@@ -78,11 +78,16 @@ pub enum TableError {
         /// Head of the lambda.
         head: Head,
     },
-    /// A class name is empty, longer than [`NAME_MAX`](crate::NAME_MAX) bytes, or is the
-    /// reserved label `background`.
+    /// A class name breaks the rule of DESIGN §6.15 (see
+    /// [`check_class_name`](crate::check_class_name)): it is empty, longer than
+    /// [`NAME_MAX`](crate::NAME_MAX) bytes, the reserved label `background`, or (in a
+    /// table built now, or decoded from format version
+    /// [`NAME_RULE_VERSION`](crate::NAME_RULE_VERSION) on) not printable or padded.
     Name {
         /// Class index.
         class: u16,
+        /// The rule broken.
+        error: crate::NameError,
     },
     /// Two classes have the same name.
     DuplicateName {
@@ -135,11 +140,7 @@ impl fmt::Display for TableError {
                     Head::Ml | Head::Map => crate::MAX_LAMBDA,
                 }
             ),
-            Self::Name { class } => write!(
-                f,
-                "name of class {class} is empty, longer than {} bytes, or `background`",
-                crate::NAME_MAX
-            ),
+            Self::Name { class, error } => write!(f, "name of class {class}: {error}"),
             Self::DuplicateName { class } => {
                 write!(f, "name of class {class} repeats an earlier class name")
             }

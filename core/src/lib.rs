@@ -75,7 +75,10 @@ pub use histogram::{
 };
 pub use layer::{argmax, decide, scores_from_evidence, Scores};
 pub use math::{Backend, Libm};
-pub use name::{ClassName, NAME_MAX};
+pub use name::{
+    check_class_name, check_class_names, refused_char, CharKind, ClassName, NameError, NAME_MAX,
+    NAME_RULE_VERSION,
+};
 pub use open::{OpenParams, MAX_EPSILON, MAX_TEMPERATURE, MIN_TEMPERATURE};
 pub use qtable::{
     code_range, dequantize, Code, QField, QTable, QTableError, MAX_LOG_TERM, MAX_MASS,

@@ -150,6 +150,16 @@ impl<
         settings: Settings,
         classes: [ClassSpec<'_, [f32; B_ML], [f32; B_MAP]>; K],
     ) -> Result<Self, TableError> {
+        Self::from_parts_named(settings, classes, ClassName::checked)
+    }
+
+    /// [`from_parts`](Self::from_parts) with the names stored by `store` (the whole
+    /// rule, or what an older format version holds).
+    fn from_parts_named(
+        settings: Settings,
+        classes: [ClassSpec<'_, [f32; B_ML], [f32; B_MAP]>; K],
+        store: fn(&str) -> Result<ClassName, crate::NameError>,
+    ) -> Result<Self, TableError> {
         #[allow(clippy::let_unit_value)]
         let () = Self::SHAPE_OK;
         if B_BAYES > 0 {
@@ -158,7 +168,7 @@ impl<
         settings.validate()?;
         let mut table = Self::placeholder(settings);
         for (i, spec) in classes.into_iter().enumerate() {
-            let c = spec.validate(i, B_ML, B_MAP)?;
+            let c = spec.validate_with(i, B_ML, B_MAP, store)?;
             if let (Some(n), Some(r), Some(p), Some(ml), Some(map)) = (
                 table.names.get_mut(i),
                 table.rows.get_mut(i),
@@ -672,13 +682,13 @@ mod tests {
                 map_range: c.map_range,
                 map_freqs: to_array(&c.map_freqs).ok_or(bins(Head::Map))?,
             };
-            spec.clone().validate(i, B_ML, B_MAP)?;
+            spec.clone().validate_decoded(i, B_ML, B_MAP)?;
             specs.push(spec);
         }
         let Ok(specs) = <[_; K]>::try_from(specs) else {
             return Err(DecodeError::Malformed);
         };
-        let table = Table::<K, B_ML, B_MAP>::from_parts(settings, specs)?;
+        let table = Table::<K, B_ML, B_MAP>::from_parts_named(settings, specs, ClassName::stored)?;
         wire::check_canonical(bytes.len(), &table.view())?;
         Ok(table)
     }

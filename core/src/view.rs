@@ -10,7 +10,7 @@ use crate::gaussian::Gaussian;
 use crate::histogram::{Axis, Histogram};
 use crate::layer;
 use crate::math::Backend;
-use crate::name::ClassName;
+use crate::name::{check_class_name, ClassName, NAME_RULE_VERSION};
 use crate::open::{self, OpenParams};
 use crate::wire::{self, BayesSlots, ClassFields, ClassSpec, Header, Settings};
 
@@ -358,6 +358,9 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
             self.validate_class(i, bins_ml, bins_map)?;
         }
         check_unique_names(self.names)?;
+        if header.version >= NAME_RULE_VERSION {
+            check_name_rule(self.names)?;
+        }
         if let (Some(b), Some((lambda, lens))) = (self.bayes, parsed.bayes) {
             let bins = usize::from(header.bins_bayes);
             let expected = [b.rows.len(), b.axes.len(), b.terms.len()];
@@ -401,7 +404,7 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
             map_range: (map.lo, map.hi),
             map_freqs: map.freqs.as_ref(),
         };
-        let c = spec.validate(i, bins_ml, bins_map)?;
+        let c = spec.validate_decoded(i, bins_ml, bins_map)?;
         let (name, prior) = (c.name, c.prior);
         let ml_width = (c.ml.width, c.ml.inv_width);
         let map_width = (c.map.width, c.map.inv_width);
@@ -420,6 +423,20 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
     }
 }
 
+/// Checks the whole name rule of DESIGN §6.15 ([`check_class_name`]) on every name of a
+/// decoded table of format version [`NAME_RULE_VERSION`] or later; older versions only
+/// hold names of 1 to `NAME_MAX` bytes other than `background`, checked as they are
+/// stored.
+pub(crate) fn check_name_rule(names: &[ClassName]) -> Result<(), TableError> {
+    for (i, n) in names.iter().enumerate() {
+        check_class_name(n.as_str()).map_err(|error| TableError::Name {
+            class: u16::try_from(i).unwrap_or(u16::MAX),
+            error,
+        })?;
+    }
+    Ok(())
+}
+
 /// Checks that no name repeats an earlier one (O(K^2), decode time only).
 pub(crate) fn check_unique_names(names: &[ClassName]) -> Result<(), TableError> {
     for (i, n) in names.iter().enumerate() {
@@ -430,4 +447,57 @@ pub(crate) fn check_unique_names(names: &[ClassName]) -> Result<(), TableError> 
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::name::{CharKind, NameError};
+
+    /// The decoder's name check of tables from format version `NAME_RULE_VERSION` on:
+    /// the names an older table may store, refused with the rule they break.
+    #[test]
+    fn name_rule_of_new_tables() {
+        let names = |list: &[&str]| -> std::vec::Vec<ClassName> {
+            list.iter().map(|n| ClassName::stored(n).unwrap()).collect()
+        };
+        assert_eq!(check_name_rule(&names(&["car", "traffic light"])), Ok(()));
+        let cases: &[(&[&str], u16, NameError)] = &[
+            (
+                &["car", "*/\n#include"],
+                1,
+                NameError::Char {
+                    ch: '\n',
+                    at: 2,
+                    kind: CharKind::Control,
+                },
+            ),
+            (
+                &["\u{1b}[2J", "car"],
+                0,
+                NameError::Char {
+                    ch: '\u{1b}',
+                    at: 0,
+                    kind: CharKind::Control,
+                },
+            ),
+            (
+                &["car", "bus", "rac\u{202E}"],
+                2,
+                NameError::Char {
+                    ch: '\u{202E}',
+                    at: 3,
+                    kind: CharKind::Invisible,
+                },
+            ),
+            (&["car", "bus "], 1, NameError::Padded),
+        ];
+        for &(list, class, error) in cases {
+            assert_eq!(
+                check_name_rule(&names(list)),
+                Err(TableError::Name { class, error }),
+                "{list:?}"
+            );
+        }
+    }
 }

@@ -30,7 +30,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{DecodeError, EncodeError, Head, TableError};
 use crate::gaussian::{Gaussian, GaussianError};
 use crate::histogram::{Axis, EdgeMode, Histogram, HistogramError, UpperTail};
-use crate::name::{ClassName, NAME_MAX};
+use crate::name::{ClassName, NameError, NAME_MAX};
 use crate::view::TableView;
 
 mod parse;
@@ -109,7 +109,7 @@ impl Settings {
 /// `Vec<f32>` on the host).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClassSpec<'a, F, G> {
-    /// Class name (see [`ClassName::new`] for the rules).
+    /// Class name (see [`check_class_name`](crate::check_class_name) for the rules).
     pub name: &'a str,
     /// Number of training rows the class was fitted from (provenance).
     pub rows: u64,
@@ -137,7 +137,8 @@ pub(crate) struct ValidClass<F, G> {
 }
 
 impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> ClassSpec<'a, F, G> {
-    /// Validates class `i` against every per-class invariant; bin counts must be
+    /// Validates class `i` of a table being built against every per-class invariant,
+    /// its name against the whole name rule (DESIGN §6.15); bin counts must be
     /// `bins_ml` and `bins_map`.
     pub(crate) fn validate(
         self,
@@ -145,8 +146,31 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> ClassSpec<'a, F, G> {
         bins_ml: usize,
         bins_map: usize,
     ) -> Result<ValidClass<F, G>, TableError> {
+        self.validate_with(i, bins_ml, bins_map, ClassName::checked)
+    }
+
+    /// As [`validate`](Self::validate) for a class as decoded, whose name only needs
+    /// what every format version holds ([`ClassName::stored`]); the decoder checks the
+    /// whole name rule separately, by format version.
+    pub(crate) fn validate_decoded(
+        self,
+        i: usize,
+        bins_ml: usize,
+        bins_map: usize,
+    ) -> Result<ValidClass<F, G>, TableError> {
+        self.validate_with(i, bins_ml, bins_map, ClassName::stored)
+    }
+
+    /// [`validate`](Self::validate) with the name stored by `store`.
+    pub(crate) fn validate_with(
+        self,
+        i: usize,
+        bins_ml: usize,
+        bins_map: usize,
+        store: fn(&str) -> Result<ClassName, NameError>,
+    ) -> Result<ValidClass<F, G>, TableError> {
         let class = u16::try_from(i).map_err(|_| TableError::ClassCount)?;
-        let name = ClassName::new(self.name).ok_or(TableError::Name { class })?;
+        let name = store(self.name).map_err(|error| TableError::Name { class, error })?;
         if self.ml_freqs.as_ref().len() != bins_ml {
             return Err(TableError::BinCount {
                 head: Head::Ml,

@@ -11,6 +11,8 @@
 #include "expected.h"
 #include "mlmap.h"
 #include "semihosting.h"
+/* This file holds the table's bytes (table.h declares them everywhere else). */
+#define MLMAP_TABLE_BYTES_IMPLEMENTATION
 #include "table.h"
 
 static mlmap_table_t table; /* in .bss: zero, "no table" */

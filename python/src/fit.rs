@@ -10,7 +10,7 @@ use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
 use std::path::Path;
 
-use mlmap::host::dataset::{DataError, DataErrorKind, RowSource};
+use mlmap::host::dataset::{DataError, RowSource};
 use mlmap::host::fit::{
     self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitLabel, FitLogit, FitParams,
     FitStats, TrainingSet,
@@ -137,35 +137,15 @@ fn class_names(classes: Option<Vec<String>>, k: usize) -> PyResult<Vec<String>> 
 
 /// The rules of a data file's class names (DESIGN §2, §6.15), with its messages.
 fn check_class_names(names: &[String]) -> PyResult<()> {
-    let refuse = |kind: DataErrorKind, name: Option<&str>| {
+    mlmap::host::dataset::check_class_names(names, |i, kind| {
         let e = DataError::new("classes", kind);
-        let e = match name {
-            Some(n) => e.in_column(n),
+        match names.get(i).filter(|n| !n.is_empty()) {
+            Some(n) => e.in_column(n.as_str()),
             None => e,
-        };
-        Err(value_error(e.to_string()))
-    };
-    if names.len() < 2 || names.len() > usize::from(u16::MAX) {
-        return refuse(DataErrorKind::ClassCount { found: names.len() }, None);
-    }
-    for (i, name) in names.iter().enumerate() {
-        if name.is_empty() {
-            return refuse(DataErrorKind::EmptyColumnName { index: i + 1 }, None);
         }
-        if name == "background" {
-            return refuse(DataErrorKind::ReservedClassName, Some(name));
-        }
-        if name.len() > mlmap::NAME_MAX {
-            return refuse(
-                DataErrorKind::ClassNameTooLong { len: name.len() },
-                Some(name),
-            );
-        }
-        if names.get(..i).is_some_and(|seen| seen.contains(name)) {
-            return refuse(DataErrorKind::DuplicateColumn, Some(name));
-        }
-    }
-    Ok(())
+    })
+    .map(|_| ())
+    .map_err(|e| value_error(e.to_string()))
 }
 
 /// The arrays of a fit, checked and held for one call.

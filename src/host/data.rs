@@ -272,6 +272,7 @@ impl RowSource for Loaded {
     }
 }
 
+
 /// Refuses data whose classes differ from the table's (names and order).
 ///
 /// # Errors

@@ -40,7 +40,7 @@ mod npy_dir;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::string::{String, ToString};
+use std::string::String;
 use std::vec::Vec;
 
 pub use error::{DataError, DataErrorKind, Location};
@@ -57,14 +57,15 @@ pub const MAX_CLASSES: usize = 4096;
 /// How many characters of a field an error message repeats.
 const ECHO_CHARS: usize = 48;
 
-/// `text` for an error message: whole when short, else its first characters and its
-/// length (a field can be up to [`MAX_RECORD_BYTES`] long).
+/// `text` for an error message, its non-printable characters escaped: whole when short,
+/// else its first characters and its length (a field can be up to [`MAX_RECORD_BYTES`] long).
 pub(crate) fn echo(text: &str) -> String {
+    // Shown through `visible`: no control character reaches the terminal raw.
     match text.char_indices().nth(ECHO_CHARS) {
-        None => text.to_string(),
+        None => crate::host::escape::visible(text).into_owned(),
         Some((end, _)) => std::format!(
             "{}... ({} bytes)",
-            text.get(..end).unwrap_or_default(),
+            crate::host::escape::visible(text.get(..end).unwrap_or_default()),
             text.len()
         ),
     }
@@ -303,36 +304,34 @@ impl DataSource {
     }
 }
 
-/// Checks a list of class names (DESIGN §2 and the table's name rules); `error` builds
-/// the error for name `i` (`usize::MAX` when no single name is at fault). Returns the
-/// name-to-index map.
-fn check_class_names(
+/// Checks a list of class names against the rule of DESIGN §2 and §6.15: between 2 and
+/// 65535 names, each passing [`check_class_name`](crate::check_class_name), none twice.
+/// `error` builds the error for name `i` (`usize::MAX` when no single name is at
+/// fault). Returns the name-to-index map.
+///
+/// # Errors
+///
+/// The error `error` builds for the first name at fault, of the kind
+/// [`DataErrorKind::of_name`] gives.
+pub fn check_class_names<E>(
     names: &[String],
-    error: impl Fn(usize, DataErrorKind) -> DataError,
-) -> Result<HashMap<String, usize>, DataError> {
+    error: impl Fn(usize, DataErrorKind) -> E,
+) -> Result<HashMap<String, usize>, E> {
     if names.len() < 2 || names.len() > MAX_CLASSES {
         return Err(error(
             usize::MAX,
             DataErrorKind::ClassCount { found: names.len() },
         ));
     }
-    let mut index = HashMap::with_capacity(names.len());
+    let mut index: HashMap<String, usize> = HashMap::with_capacity(names.len());
     for (i, name) in names.iter().enumerate() {
-        if name.is_empty() {
-            return Err(error(i, DataErrorKind::EmptyColumnName { index: i + 1 }));
+        crate::check_class_name(name).map_err(|e| error(i, DataErrorKind::of_name(i, name, e)))?;
+        if let Some(&first) = index.get(name) {
+            let first = u16::try_from(first).unwrap_or(u16::MAX);
+            let repeated = crate::NameError::Repeated { first };
+            return Err(error(i, DataErrorKind::of_name(i, name, repeated)));
         }
-        if name == "background" {
-            return Err(error(i, DataErrorKind::ReservedClassName));
-        }
-        if name.len() > crate::NAME_MAX {
-            return Err(error(
-                i,
-                DataErrorKind::ClassNameTooLong { len: name.len() },
-            ));
-        }
-        if index.insert(name.clone(), i).is_some() {
-            return Err(error(i, DataErrorKind::DuplicateColumn));
-        }
+        index.insert(name.clone(), i);
     }
     Ok(index)
 }

@@ -16,6 +16,7 @@ pub mod baselines;
 pub mod data;
 pub mod dataset;
 mod error;
+pub mod escape;
 pub mod eval;
 pub mod export;
 pub mod fit;

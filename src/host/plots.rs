@@ -23,6 +23,7 @@
 mod draw;
 mod stats;
 
+use std::borrow::Cow;
 use std::fmt;
 use std::format;
 use std::fs;
@@ -34,6 +35,7 @@ use std::vec::Vec;
 
 use self::draw::{class_color, method_color, Colour, LikelihoodPanel};
 use self::stats::{ece_label, pr_curve, PrCurve, ScoreHist};
+use crate::host::escape::visible;
 use crate::host::metrics::{self, MetricsConfig, MetricsError, Outcome};
 use crate::host::DynTable;
 use crate::Histogram;
@@ -205,7 +207,7 @@ pub fn pr_curves<S: AsRef<str>>(
         .enumerate()
         .map(|(c, name)| {
             let curve = class_curve(&path, scores, k, labels, c)?;
-            Ok((name.as_ref().to_string(), class_color(c), curve))
+            Ok((visible(name.as_ref()).into_owned(), class_color(c), curve))
         })
         .collect::<Result<Vec<(String, Colour, PrCurve)>, PlotError>>()?;
     ensure_dir(dir)?;
@@ -248,7 +250,7 @@ pub fn pr_by_class<S: AsRef<str>>(
     ensure_dir(dir)?;
     let mut written = Vec::with_capacity(k);
     for (c, (name, stem)) in class_names.iter().zip(&stems).enumerate() {
-        let name = name.as_ref();
+        let name = visible(name.as_ref());
         let path = dir.join(format!("{stem}.svg"));
         let curves = methods
             .iter()
@@ -297,14 +299,17 @@ pub fn fitted_histograms(dir: &Path, table: &DynTable) -> Result<Vec<PathBuf>, P
         ),
     ];
     let mut written = Vec::with_capacity(heads.len());
+    // Names are SVG text: control characters (which XML cannot hold) made visible.
+    let shown: Vec<Cow<'_, str>> = table.class_names().map(visible).collect();
     for (file, head, hists, lambda) in heads {
         let path = dir.join(file);
         let bins = hists.first().map_or(0, Histogram::bins);
         let title = format!(
             "{head} head: likelihood histograms ({bins} bins, λ = {lambda}) and Gaussian priors"
         );
-        let panels: Vec<LikelihoodPanel<'_>> = table
-            .class_names()
+        let panels: Vec<LikelihoodPanel<'_>> = shown
+            .iter()
+            .map(AsRef::as_ref)
             .zip(hists)
             .zip(table.priors())
             .zip(table.rows())

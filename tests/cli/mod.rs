@@ -36,6 +36,14 @@ mod eval;
 /// logits byte for byte (CSV, NPY int8 and int16); bad codes, tables and parameters.
 mod quantize;
 
+/// `export-c`: the header compiles as C and C++ with one definition of the array, holds
+/// the table's bytes, escapes class names and takes only a safe `--name`.
+mod export_c;
+
+/// Class names at every reader and writer: unprintable names refused with the rule
+/// they break, names of older tables escaped on the terminal, CSV quoting.
+mod names;
+
 /// `inspect`: the text and JSON reports of a table; stdout closed early or failing.
 mod inspect;
 

@@ -478,7 +478,7 @@ pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
     let rows: Vec<String> = table
         .class_names()
         .zip(table.rows())
-        .map(|(n, r)| format!("{n} {r}"))
+        .map(|(n, r)| format!("{} {r}", mlmap::host::escape::visible(n)))
         .collect();
     let _ = writeln!(s, "  training rows: {}", rows.join(", "));
     s

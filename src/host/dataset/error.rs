@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 use std::string::{String, ToString};
 use std::vec::Vec;
 
+use crate::NameError;
+
 /// Where in a file an error was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Location {
@@ -53,6 +55,12 @@ pub enum DataErrorKind {
     ClassNameTooLong {
         /// Length of the name in bytes.
         len: usize,
+    },
+    /// A class name holds a character that is not printable, or starts or ends with a
+    /// space (DESIGN §6.15).
+    BadClassName {
+        /// The rule it breaks ([`NameError::Char`] or [`NameError::Padded`]).
+        error: NameError,
     },
     /// There are fewer than 2 (or more than [`MAX_CLASSES`](super::MAX_CLASSES)) class
     /// columns.
@@ -173,6 +181,18 @@ pub enum DataErrorKind {
 }
 
 impl DataErrorKind {
+    /// The kind of error of class name `name` (the `i`-th, 0-based) that breaks the
+    /// rule `error` of [`check_class_name`](crate::check_class_name).
+    pub fn of_name(i: usize, name: &str, error: NameError) -> Self {
+        match error {
+            NameError::Empty => Self::EmptyColumnName { index: i + 1 },
+            NameError::TooLong => Self::ClassNameTooLong { len: name.len() },
+            NameError::Reserved => Self::ReservedClassName,
+            NameError::Repeated { .. } => Self::DuplicateColumn,
+            NameError::Char { .. } | NameError::Padded => Self::BadClassName { error },
+        }
+    }
+
     /// `true` when the input is at fault (exit code 2), `false` for a failure of the
     /// machine while reading a valid file (exit code 1). A missing or unreadable input
     /// file is the caller's fault.
@@ -203,6 +223,7 @@ impl fmt::Display for DataErrorKind {
                 "the class name is {len} bytes long; a table holds at most {} bytes",
                 crate::NAME_MAX
             ),
+            Self::BadClassName { error } => write!(f, "not a valid class name: {error}"),
             Self::ClassCount { found } => write!(
                 f,
                 "found {found} class column(s); between 2 and {} are needed",

@@ -293,7 +293,7 @@ pub(crate) fn class_index(e: &TableError) -> Option<u16> {
         | TableError::BinCount { class, .. }
         | TableError::Mean { class }
         | TableError::Variance { class }
-        | TableError::Name { class }
+        | TableError::Name { class, .. }
         | TableError::DuplicateName { class }
         | TableError::CategoryRows { class } => Some(class),
         _ => None,

@@ -190,6 +190,7 @@ impl FitStats {
     /// or that are truncated or corrupt.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FitError> {
         let w: StatsWire = decode(MAGIC_STATS, bytes)?;
+        check_names(&w.classes, "statistics")?;
         let bad = |what: &str| format_error(std::format!("inconsistent statistics: {what}"));
         let params = w.params.map(ParamsWire::into_params).transpose()?;
         if w.moments.len() != w.classes.len() {
@@ -283,6 +284,7 @@ impl FitEdges {
     }
 
     fn from_wire(w: EdgesWire) -> Result<Self, FitError> {
+        check_names(&w.classes, "edges")?;
         let params = w.params.into_params()?;
         let k = w.classes.len();
         let bad = |what: &str| format_error(std::format!("inconsistent edges: {what}"));
@@ -545,6 +547,19 @@ pub fn finish(stats: &FitStats, counts: &FitCounts) -> Result<DynTable, FitError
         }
         _ => Ok(table),
     }
+}
+
+/// Checks the class names of serialized `what` (statistics, edges or counts) against
+/// the rule of DESIGN §6.15, as the data readers do.
+fn check_names(classes: &[String], what: &str) -> Result<(), FitError> {
+    crate::host::dataset::check_class_names(classes, |i, kind| {
+        let class = match classes.get(i) {
+            Some(name) => std::format!("class {i} ({name:?})"),
+            None => "classes".to_string(),
+        };
+        format_error(std::format!("{what} with an invalid {class}: {kind}"))
+    })
+    .map(|_| ())
 }
 
 fn format_error(reason: String) -> FitError {

@@ -5,7 +5,7 @@ use std::fs;
 use std::path::PathBuf;
 
 use clap::Args;
-use mlmap::host::export::c_header;
+use mlmap::host::export::{c_header, check_c_name};
 
 use crate::error::{CliError, Result};
 use crate::output;
@@ -19,9 +19,22 @@ pub struct ExportCArgs {
     /// The C header to write.
     #[arg(long, short, value_name = "FILE.h")]
     pub output: PathBuf,
-    /// The array's name; its length is the macro NAME_LEN (upper case).
-    #[arg(long, value_name = "IDENT", default_value = "mlmap_table_bytes")]
+    /// The array's name, a C identifier that no C or C++ standard reserves; its length
+    /// is the macro NAME_LEN, and NAME_IMPLEMENTATION defines it (upper case).
+    #[arg(
+        long,
+        value_name = "IDENT",
+        default_value = "mlmap_table_bytes",
+        value_parser = c_name
+    )]
     pub name: String,
+}
+
+/// Parses `--name`: a usage error (exit 2) for a name the header cannot use.
+fn c_name(name: &str) -> std::result::Result<String, String> {
+    check_c_name(name)
+        .map(|()| name.to_owned())
+        .map_err(|e| e.to_string())
 }
 
 pub fn run(args: &ExportCArgs) -> Result<()> {

@@ -1,7 +1,9 @@
 //! `mlmap inspect TABLE`: a readable summary of a table file.
 
+use std::borrow::Cow;
 use std::fmt::Write as _;
 
+use mlmap::host::escape::visible;
 use mlmap::host::names::Named;
 use mlmap::host::{DynQTable, DynTable};
 use mlmap::{BayesView, Histogram};
@@ -251,7 +253,9 @@ fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -
         mlmap::FORMAT_VERSION,
         bytes.len()
     );
-    let names: Vec<&str> = t.class_names().collect();
+    // A table of an older format version may hold names with control characters.
+    let shown: Vec<Cow<'_, str>> = t.class_names().map(visible).collect();
+    let names: Vec<&str> = shown.iter().map(AsRef::as_ref).collect();
     let _ = writeln!(s, "classes     {}: {}", t.k(), names.join(", "));
     let _ = writeln!(
         s,
@@ -369,7 +373,8 @@ pub fn run(args: &InspectArgs) -> Result<()> {
         Format::Text | Format::Markdown => {
             let mut s = render_text(&args.table, &table, bytes, args.bins);
             if let Some(q) = &quantized {
-                let names: Vec<&str> = table.class_names().collect();
+                let shown: Vec<Cow<'_, str>> = table.class_names().map(visible).collect();
+                let names: Vec<&str> = shown.iter().map(AsRef::as_ref).collect();
                 quantized_text(&mut s, q, &names);
             }
             s
