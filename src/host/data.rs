@@ -309,3 +309,70 @@ pub fn check_classes<'a>(
 
 /// How many class names a message about two class lists shows of each.
 const SHOWN_CLASSES: usize = 8;
+
+/// Training rows followed by rows taken as `background` whatever their label: the rows of
+/// `fit --background FILE` (DESIGN §1.8, "Learning unknown from data"), e.g. logged false
+/// positives or objects of classes the detector must not report. They enter only the
+/// Bayes head's `background` category (and so the open head's `q`); the ML and MAP heads
+/// never see background rows.
+#[derive(Debug)]
+pub struct WithBackground<'s, S> {
+    train: &'s S,
+    background: &'s [DataSource],
+}
+
+impl<'s, S: RowSource> WithBackground<'s, S> {
+    /// `train` followed by every row of each of `background`, in order.
+    ///
+    /// # Errors
+    ///
+    /// [`HostError::Input`] naming the background file whose classes differ from the
+    /// training data's (names and order).
+    pub fn new(train: &'s S, background: &'s [DataSource]) -> Result<Self, HostError> {
+        for b in background {
+            check_classes(b.path(), b.classes(), train.classes().iter().map(String::as_str))?;
+        }
+        Ok(Self { train, background })
+    }
+}
+
+impl<S: RowSource> RowSource for WithBackground<'_, S> {
+    fn path(&self) -> &Path {
+        self.train.path()
+    }
+
+    fn classes(&self) -> &[String] {
+        self.train.classes()
+    }
+
+    fn has_labels(&self) -> bool {
+        self.train.has_labels()
+    }
+
+    fn for_each_row<E, F>(&self, mut f: F) -> Result<(), E>
+    where
+        E: From<DataError>,
+        F: FnMut(Row<'_>) -> Result<(), E>,
+    {
+        self.train.for_each_row(&mut f)?;
+        for b in self.background {
+            b.for_each_row(|row| {
+                f(Row {
+                    label: Label::Background,
+                    ..row
+                })
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// Opens the `--background` files of a command that reads them more than once (as
+/// [`open_twice`]).
+///
+/// # Errors
+///
+/// As [`open_twice`], for the first file that cannot be opened.
+pub fn open_background(paths: &[std::path::PathBuf]) -> Result<Vec<DataSource>, HostError> {
+    paths.iter().map(|p| open_twice(p)).collect()
+}

@@ -127,6 +127,10 @@ pub struct FitArgs {
     /// Training data: a CSV file or an NPY directory.
     #[arg(long, value_name = "FILE")]
     pub train: PathBuf,
+    /// Rows taken as `background` whatever their label (repeatable; CSV or NPY): known
+    /// unknowns such as logged false positives, for the Bayes and open heads.
+    #[arg(long, value_name = "FILE")]
+    pub background: Vec<PathBuf>,
     /// The fit settings.
     #[command(flatten)]
     pub settings: FitSettings,
@@ -141,6 +145,10 @@ pub struct StatsArgs {
     /// One shard of the training data (CSV file or NPY directory).
     #[arg(long, value_name = "FILE")]
     pub train: PathBuf,
+    /// Rows taken as `background` whatever their label (repeatable; CSV or NPY): the
+    /// shard's known unknowns; give each background file to one shard's passes (a) and (b).
+    #[arg(long, value_name = "FILE")]
+    pub background: Vec<PathBuf>,
     /// Pass (b): the merged pass-(a) statistics of every shard; the shard's bin counts
     /// are written, over the edges and with the settings recorded there.
     #[arg(
@@ -190,6 +198,10 @@ pub struct TuneArgs {
     /// Training data (CSV file or NPY directory).
     #[arg(long, value_name = "FILE")]
     pub train: PathBuf,
+    /// Rows taken as `background` whatever their label (repeatable; CSV or NPY): known
+    /// unknowns such as logged false positives, for the Bayes and open heads.
+    #[arg(long, value_name = "FILE")]
+    pub background: Vec<PathBuf>,
     /// Validation data the candidates are scored on.
     #[arg(long, value_name = "FILE")]
     pub val: PathBuf,

@@ -13,8 +13,12 @@ pub fn run(args: &FitArgs) -> Result<()> {
     let params = args.settings.params();
     let train = &args.train;
     params.validate().map_err(|e| fit_error(train, e))?;
-    output::check_outputs(&args.output, &[train])?;
+    let mut inputs = vec![train.as_path()];
+    inputs.extend(args.background.iter().map(|p| p.as_path()));
+    output::check_outputs(&args.output, &inputs)?;
     let src = data::open_twice(train)?;
+    let background = data::open_background(&args.background)?;
+    let src = data::WithBackground::new(&src, &background)?;
     let table = fit::fit(&src, &params).map_err(|e| fit_error(train, e))?;
     for w in fit::warnings(&table) {
         eprintln!("mlmap: warning: {}: {w}", train.display());

@@ -250,7 +250,7 @@ fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -
     let _ = writeln!(
         s,
         "format      version {}, {} bytes, CRC-32 {crc:08x} (verified)",
-        mlmap::FORMAT_VERSION,
+        file_version(t),
         bytes.len()
     );
     // A table of an older format version may hold names with control characters.
@@ -303,7 +303,31 @@ fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -
             let _ = writeln!(s, "\nBayes head  none");
         }
     }
+    match t.open() {
+        Some(o) => {
+            let _ = writeln!(
+                s,
+                "\nopen head   temperature {}, epsilon {:e} (unknown log-score {:e}), on the Bayes head",
+                o.temperature(),
+                o.epsilon(),
+                o.log_unknown()
+            );
+        }
+        None => {
+            let _ = writeln!(s, "\nopen head   none");
+        }
+    }
     s
+}
+
+/// The format version the table is written in (DESIGN §3): 3 with the open head, 2
+/// with the Bayes head only, 1 otherwise.
+fn file_version(t: &DynTable) -> u16 {
+    match (t.bayes().is_some(), t.open().is_some()) {
+        (_, true) => 3,
+        (true, false) => 2,
+        (false, false) => 1,
+    }
 }
 
 /// The file's table bytes and its quantized section, if it has one.
@@ -347,7 +371,7 @@ fn render_json(
         .collect();
     let v = serde_json::json!({
         "path": path.display().to_string(),
-        "format_version": mlmap::FORMAT_VERSION,
+        "format_version": file_version(t),
         "bytes": bytes.len(),
         "crc_ok": true,
         "edge_mode": st.edge_mode.name(),
@@ -358,6 +382,11 @@ fn render_json(
         "lambda_map": st.lambda_map,
         "classes": classes,
         "bayes": t.bayes().map(|b| bayes_json(&b, &names)),
+        "open": t.open().map(|o| serde_json::json!({
+            "temperature": o.temperature(),
+            "epsilon": o.epsilon(),
+            "log_unknown": o.log_unknown(),
+        })),
         "quantized": quantized.map(|q| quantized_json(q, &names)),
     });
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();

@@ -18,8 +18,12 @@ pub fn run(args: &StatsArgs) -> Result<()> {
         None => {
             let params = args.settings.params();
             params.validate().map_err(|e| fit_error(train, e))?;
-            output::check_outputs(&args.output, &[train])?;
-            let src = data::open(train)?;
+            let mut inputs = vec![train.as_path()];
+            inputs.extend(args.background.iter().map(|p| p.as_path()));
+            output::check_outputs(&args.output, &inputs)?;
+            let plain = data::open(train)?;
+            let background = data::open_background(&args.background)?;
+            let src = data::WithBackground::new(&plain, &background)?;
             if !src.has_labels() {
                 return Err(fit_error(
                     train,
@@ -39,7 +43,9 @@ pub fn run(args: &StatsArgs) -> Result<()> {
             write_fit_file(&args.output, &FitFile::Stats(stats))
         }
         Some(stats_path) => {
-            output::check_outputs(&args.output, &[train, stats_path])?;
+            let mut inputs = vec![train.as_path(), stats_path.as_path()];
+            inputs.extend(args.background.iter().map(|p| p.as_path()));
+            output::check_outputs(&args.output, &inputs)?;
             let stats = match read_fit_file(stats_path)? {
                 FitFile::Stats(s) => s,
                 FitFile::Counts(_) => {
@@ -58,7 +64,9 @@ pub fn run(args: &StatsArgs) -> Result<()> {
             let edges = stats
                 .edges(&params)
                 .map_err(|e| CliError::input(stats_path, e))?;
-            let src = data::open(train)?;
+            let plain = data::open(train)?;
+            let background = data::open_background(&args.background)?;
+            let src = data::WithBackground::new(&plain, &background)?;
             data::check_classes(
                 train,
                 src.classes(),

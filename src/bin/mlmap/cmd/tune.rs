@@ -57,8 +57,12 @@ pub fn run(a: &TuneArgs) -> Result<()> {
     params.check_size().map_err(CliError::Input)?;
     let mut inputs = vec![a.train.as_path(), a.val.as_path()];
     inputs.extend(a.ood.as_deref());
+    inputs.extend(a.background.iter().map(|p| p.as_path()));
     output::check_outputs(&a.output, &inputs)?;
-    let train = TrainingSet::read(&data::open(&a.train)?).map_err(|e| fit_error(&a.train, e))?;
+    let background = data::open_background(&a.background)?;
+    let train_src = data::open(&a.train)?;
+    let train = TrainingSet::read(&data::WithBackground::new(&train_src, &background)?)
+        .map_err(|e| fit_error(&a.train, e))?;
     let val = Loaded::read(&a.val)?;
     let ood = a.ood.as_deref().map(Loaded::read).transpose()?;
     let bar = ProgressBar::new(0).with_message("bin counts");
