@@ -298,9 +298,10 @@ mlmap_status_t mlmap_limits(mlmap_limits_t *limits);
  * function given it returns `MLMAP_ERR_NO_TABLE`. The bytes are not used after the
  * call returns.
  *
- * Reads and writes only the first `mlmap_limits().table_size` bytes of the storage
- * (the rest, up to `table_size`, is never touched): one pass zeroes them, one pass
- * over the input decodes into them; uses a few hundred bytes of stack.
+ * Work: zeroes the first `mlmap_limits().table_size` bytes of the storage (the rest of
+ * the `table_size` bytes is never read or written), computes the CRC-32 over the
+ * input, then parses it once into the storage and checks the invariants: time linear
+ * in `mlmap_limits().table_size` plus `len`; a few hundred bytes of stack.
  *
  * @param[out] table Storage for the table: a `mlmap_table_t`, aligned to
  *   `MLMAP_TABLE_ALIGN` (a `static mlmap_table_t` is).
