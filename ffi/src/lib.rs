@@ -20,6 +20,8 @@
 #![deny(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 #![allow(non_camel_case_types)]
+// The doc comments are the header's Doxygen comments: `@param[out]` is not a Rust link.
+#![allow(rustdoc::broken_intra_doc_links)]
 #![allow(clippy::missing_safety_doc)] // every entry point documents its contract in prose
 #![cfg_attr(
     not(test),
