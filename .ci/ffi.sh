@@ -6,13 +6,16 @@
 #      and references no allocator;
 #   3. the Rust test of the entry points, and the host C test ffi/tests/host.c: every
 #      function and status, NULL and short buffers, every single-byte corruption,
-#      scores equal bit for bit to `mlmap apply`;
+#      every aliasing rule, scores equal bit for bit to `mlmap apply`; then host.c again
+#      under -fsanitize=address,undefined, with the release library and with one built
+#      with nightly's -Zsanitizer=address (a canary read past a buffer must be caught);
 #   4. the C example ffi/firmware/ on an emulated Cortex-M4F (arm-none-eabi-gcc, the
 #      thumbv7em-none-eabihf static library, QEMU mps2-an386): scores equal bit for bit
 #      to the host library's; a canary build with one perturbed value must fail.
 # Installs cbindgen (cargo install), gcc-arm-none-eabi, libnewlib-arm-none-eabi and
-# qemu-system-arm (apt-get) when missing; without a cross compiler or Cortex-M4F Rust
-# target, step 4 fails (MLMAP_ALLOW_SKIP=1 skips it outside CI).
+# qemu-system-arm (apt-get) when missing, and uses the pinned nightly (.ci/nightly.sh);
+# without a cross compiler or Cortex-M4F Rust target, step 4 fails (MLMAP_ALLOW_SKIP=1
+# skips it outside CI).
 set -euo pipefail
 
 section() { printf '\n==== ffi: %s ====\n' "$*"; }
@@ -87,6 +90,53 @@ mlmap=target/release/mlmap
 "$work/host" tables/default.mlmap tests/golden/layer/small.mlmap examples/data/test.csv \
     "$work/apply.csv" | tee "$work/host.log"
 grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/host.log" || fail "the host C test did not pass"
+
+section "host C test under AddressSanitizer and UndefinedBehaviorSanitizer"
+# Two libraries: the release one (fat LTO, panic abort), as a C program links it, which
+# shows that it links into a sanitized program and that nothing host.c does through it
+# is caught; and one built with nightly's `-Zsanitizer=address`, so that the library's
+# own loads and stores are checked too (the release one's are not instrumented). A
+# canary that promises more bytes than it passes must be caught inside the library.
+SAN=(-std=c11 -O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined
+    -fno-sanitize-recover=all -Wall -Wextra -Werror -Iinclude)
+export ASAN_OPTIONS=abort_on_error=0:detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1
+# shellcheck source=.ci/nightly.sh
+source .ci/nightly.sh
+nightly_acquire || fail "no pinned nightly toolchain: the library cannot be built with -Zsanitizer=address"
+host_triple=$(rustc -vV | awk '/^host:/ { print $2 }')
+(cd ffi && RUSTFLAGS="-Zsanitizer=address" cargo +"$NIGHTLY" rustc --release \
+    --crate-type staticlib --target "$host_triple" --target-dir target/asan --quiet)
+asan_lib="ffi/target/asan/$host_triple/release/libmlmap_ffi.a"
+for which in release asan; do
+    if [[ $which == release ]]; then l=$lib; else l=$asan_lib; fi
+    cc "${SAN[@]}" ffi/tests/host.c -Wl,--gc-sections "$l" -lm -o "$work/host-san-$which"
+    "$work/host-san-$which" tables/default.mlmap tests/golden/layer/small.mlmap \
+        examples/data/test.csv "$work/apply.csv" 2>"$work/host-san-$which.err" |
+        tee "$work/host-san-$which.log" || { tail -n 40 "$work/host-san-$which.err" >&2; fail "the sanitized host C test ($which library) failed"; }
+    grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/host-san-$which.log" ||
+        fail "the sanitized host C test ($which library) did not pass"
+    echo "ok: host.c under ASan and UBSan with the $which library"
+done
+cat >"$work/san-canary.c" <<'CANARY'
+#include <stdlib.h>
+#include <string.h>
+#include "mlmap.h"
+int main(void) {
+    static mlmap_table_t t;
+    uint8_t *b = calloc(16, 1);
+    memcpy(b, "MLMP", 4);
+    mlmap_status_t s = mlmap_table_decode(&t, sizeof t, b, 64); /* 16 bytes, 64 promised */
+    free(b);
+    return (int)s;
+}
+CANARY
+cc "${SAN[@]}" "$work/san-canary.c" "$asan_lib" -lm -o "$work/san-canary"
+if "$work/san-canary" 2>"$work/san-canary.log"; then
+    fail "the sanitizer canary ran to the end: the library's reads are not checked"
+fi
+grep -q 'heap-buffer-overflow' "$work/san-canary.log" && grep -q 'mlmap_table_decode' "$work/san-canary.log" ||
+    { cat "$work/san-canary.log" >&2; fail "the sanitizer canary failed, but not on the library's read"; }
+echo "ok: an out-of-bounds read inside the library is caught (canary)"
 
 section "Cortex-M4F C example"
 # shellcheck source=.ci/thumb-toolchain.sh

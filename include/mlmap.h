@@ -8,6 +8,14 @@
  * detections. Every function returns an ::mlmap_status_t (`MLMAP_OK` is 0) and checks
  * every pointer and length; ::mlmap_status_str describes any status.
  *
+ * Memory that must be disjoint (docs/DESIGN.md section 5.1): no output may overlap
+ * the table storage, and no two outputs may overlap each other. A single-detection
+ * call copies its K logits first, so its scores may overlap them in any way; a batch
+ * does not copy its inputs, so its scores are either exactly its logits (`out ==
+ * logits`) or disjoint from them, and disjoint from its objectness. Any other overlap
+ * is refused with `MLMAP_ERR_OVERLAP` before anything is written. NaN is never
+ * decided on: mlmap_decide() refuses a NaN score or logit.
+ *
  * SPDX-License-Identifier: MIT
  */
 
@@ -105,8 +113,9 @@ enum mlmap_status_t
    */
   MLMAP_ERR_NO_TABLE = 4,
   /**
-   * An output overlaps the table storage (the bytes decoded into it, or the
-   * scores of a detection).
+   * Memory that must be disjoint overlaps: an output (or the bytes to decode) and
+   * the table storage; two outputs; or a batch's scores and its inputs, other than
+   * scores written exactly over the logits (`out == logits`).
    */
   MLMAP_ERR_OVERLAP = 5,
   /**
@@ -143,7 +152,7 @@ enum mlmap_status_t
    */
   MLMAP_ERR_INVALID_TABLE = 13,
   /**
-   * Scoring: a logit is NaN.
+   * Scoring or decision: a logit is NaN.
    */
   MLMAP_ERR_NAN_LOGIT = 14,
   /**
@@ -177,6 +186,10 @@ enum mlmap_status_t
    * bytes).
    */
   MLMAP_ERR_TOO_LARGE = 21,
+  /**
+   * Decision: a score is NaN.
+   */
+  MLMAP_ERR_NAN_SCORE = 22,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -285,14 +298,19 @@ mlmap_status_t mlmap_limits(mlmap_limits_t *limits);
  * function given it returns `MLMAP_ERR_NO_TABLE`. The bytes are not used after the
  * call returns.
  *
- * Costs one pass over `table_size` bytes (zeroing) and one over the input; uses a
- * few hundred bytes of stack.
+ * Work: zeroes the first `mlmap_limits().table_size` bytes of the storage (the rest of
+ * the `table_size` bytes is never read or written), computes the CRC-32 over the
+ * input, then parses it once into the storage and checks the invariants: time linear
+ * in `mlmap_limits().table_size` plus `len`; a few hundred bytes of stack.
  *
  * @param[out] table Storage for the table: a `mlmap_table_t`, aligned to
  *   `MLMAP_TABLE_ALIGN` (a `static mlmap_table_t` is).
- * @param table_size `sizeof` the storage, at least `mlmap_limits().table_size`.
- * @param bytes The table's bytes; must not overlap the storage.
- * @param len Number of bytes.
+ * @param table_size The size of the storage in bytes (`sizeof` it): at least
+ *   `mlmap_limits().table_size` (`MLMAP_ERR_STORAGE_TOO_SMALL`), at most
+ *   `PTRDIFF_MAX` and not past the end of the address space (`MLMAP_ERR_TOO_LARGE`).
+ * @param bytes The table's bytes; must not overlap the `table_size` bytes of the
+ *   storage (`MLMAP_ERR_OVERLAP`).
+ * @param len Number of bytes, at most `PTRDIFF_MAX` (`MLMAP_ERR_TOO_LARGE`).
  * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
  *   `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, and
  *   each decode error: `MLMAP_ERR_TRUNCATED`, `MLMAP_ERR_NOT_A_TABLE`,
@@ -309,9 +327,9 @@ mlmap_status_t mlmap_table_decode(mlmap_table_t *table,
  * Gives the number of classes K of a decoded table.
  *
  * @param table A decoded table.
- * @param[out] classes Receives K.
+ * @param[out] classes Receives K; must not lie in the table storage.
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_TABLE`.
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`.
  */
 mlmap_status_t mlmap_class_count(const mlmap_table_t *table,
                                  size_t *classes);
@@ -320,9 +338,9 @@ mlmap_status_t mlmap_class_count(const mlmap_table_t *table,
  * Gives the shape of a decoded table.
  *
  * @param table A decoded table.
- * @param[out] shape Receives the shape.
+ * @param[out] shape Receives the shape; must not overlap the table storage.
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_TABLE`.
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`.
  */
 mlmap_status_t mlmap_shape(const mlmap_table_t *table,
                            mlmap_shape_t *shape);
@@ -331,9 +349,9 @@ mlmap_status_t mlmap_shape(const mlmap_table_t *table,
  * Gives the settings of a decoded table.
  *
  * @param table A decoded table.
- * @param[out] settings Receives the settings.
+ * @param[out] settings Receives the settings; must not overlap the table storage.
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_TABLE`.
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`.
  */
 mlmap_status_t mlmap_settings(const mlmap_table_t *table,
                               mlmap_settings_t *settings);
@@ -345,10 +363,12 @@ mlmap_status_t mlmap_settings(const mlmap_table_t *table,
  *
  * @param table A decoded table.
  * @param class_index The class, below K.
- * @param[out] buf Receives the name and a NUL; untouched on failure.
+ * @param[out] buf Receives the name and a NUL; untouched on failure. The bytes it
+ *   would receive must not overlap the table storage.
  * @param buf_len Size of `buf` in bytes.
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_CLASS_INDEX`, `MLMAP_ERR_BUFFER_TOO_SMALL`.
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_CLASS_INDEX`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
+ *   `MLMAP_ERR_OVERLAP`.
  */
 mlmap_status_t mlmap_class_name(const mlmap_table_t *table,
                                 size_t class_index,
@@ -361,9 +381,11 @@ mlmap_status_t mlmap_class_name(const mlmap_table_t *table,
  * @param table A decoded table.
  * @param name The name's bytes.
  * @param name_len Number of bytes of the name.
- * @param[out] class_index Receives the class index.
+ * @param[out] class_index Receives the class index; must not lie in the table
+ *   storage (it may overlap the name, which is read whole first).
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NOT_FOUND`.
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`,
+ *   `MLMAP_ERR_NOT_FOUND`.
  */
 mlmap_status_t mlmap_class_index(const mlmap_table_t *table,
                                  const char *name,
@@ -381,8 +403,9 @@ mlmap_status_t mlmap_class_index(const mlmap_table_t *table,
  * @param n_logits Number of logits; must be K.
  * @param objectness The detection's objectness, in [0, 1] (1 if the detector has
  *   none).
- * @param[out] out Receives the K scores; may be `logits` itself, must not overlap the
- *   table.
+ * @param[out] out Receives the K scores; may overlap `logits` in any way (the K
+ *   logits are copied before any score is written), must not overlap the table
+ *   storage.
  * @param out_len Number of floats at `out`, at least K.
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
  *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
@@ -440,17 +463,24 @@ mlmap_status_t mlmap_bayes(const mlmap_table_t *table,
  * Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
  * `objectness[r]` into row `r` of `out`.
  *
- * On a row that cannot be scored (NaN logit, bad objectness) the rows before it are
- * written, the others untouched, its status is returned and `*done` is its index:
- * resume at `*done + 1`.
+ * Every argument is checked before anything is written: on a failed check nothing
+ * is written, `*done` included. On a row that cannot be scored (NaN logit, bad
+ * objectness) the rows before it are written, the others untouched, its status is
+ * returned and `*done` is its index: resume at `*done + 1`.
+ *
+ * Aliasing: the `rows * K` scores are either written exactly over the logits (`out
+ * == logits`: each row is read before it is overwritten) or must not overlap them at
+ * all; a batch does not copy its inputs, so a partial overlap (e.g. `out == logits +
+ * K`) is refused with `MLMAP_ERR_OVERLAP`. The scores must not overlap `objectness`
+ * nor the table storage, and `done` must not overlap the scores, the logits, the
+ * objectness nor the table storage (`MLMAP_ERR_OVERLAP`).
  *
  * @param table A decoded table.
  * @param logits `rows * n_logits` floats, row-major.
  * @param rows Number of detections (0 is allowed).
  * @param n_logits Logits per row; must be K.
  * @param objectness `rows` floats, or NULL for an objectness of 1 everywhere.
- * @param[out] out Receives `rows * K` scores; may be `logits` itself, must not
- *   overlap the table.
+ * @param[out] out Receives `rows * K` scores; exactly `logits`, or disjoint from it.
  * @param out_len Number of floats at `out`, at least `rows * K`.
  * @param[out] done If not NULL, receives the number of rows written.
  * @return As `mlmap_ml`, and `MLMAP_ERR_TOO_LARGE`.
@@ -465,7 +495,7 @@ mlmap_status_t mlmap_ml_batch(const mlmap_table_t *table,
                               size_t *done);
 
 /**
- * Scores a batch with the MAP head; see `mlmap_ml_batch`.
+ * Scores a batch with the MAP head; see `mlmap_ml_batch` (aliasing rules included).
  *
  * @param table A decoded table.
  * @param logits `rows * n_logits` floats, row-major.
@@ -487,7 +517,7 @@ mlmap_status_t mlmap_map_batch(const mlmap_table_t *table,
                                size_t *done);
 
 /**
- * Scores a batch with the Bayes head; see `mlmap_ml_batch`.
+ * Scores a batch with the Bayes head; see `mlmap_ml_batch` (aliasing rules included).
  *
  * @param table A decoded table with a Bayes head.
  * @param logits `rows * n_logits` floats, row-major.
@@ -511,16 +541,22 @@ mlmap_status_t mlmap_bayes_batch(const mlmap_table_t *table,
 /**
  * The tie-safe decision (docs/DESIGN.md §1.7): the index of the largest score;
  * among equal largest scores, the one with the largest logit; among those, the
- * lowest index. NaN never wins. Use it instead of a plain argmax: a detection that
- * every histogram calls "I don't know" gets equal scores, and the logits then keep
- * the detector's ranking.
+ * lowest index. Use it instead of a plain argmax: a detection that every histogram
+ * calls "I don't know" gets equal scores, and the logits then keep the detector's
+ * ranking.
+ *
+ * A NaN anywhere in the scores (`MLMAP_ERR_NAN_SCORE`) or in the logits
+ * (`MLMAP_ERR_NAN_LOGIT`) is an error, not a decision (docs/DESIGN.md §5.1); `±inf`
+ * is compared as any other value.
  *
  * @param scores The K scores of one detection.
  * @param logits The same detection's K logits.
  * @param k Number of scores and logits, at least 1.
- * @param[out] class_index Receives the decided class.
+ * @param[out] class_index Receives the decided class; may overlap the inputs (they
+ *   are read whole first).
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_TOO_LARGE`.
+ *   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NAN_SCORE`,
+ *   `MLMAP_ERR_NAN_LOGIT`.
  */
 mlmap_status_t mlmap_decide(const float *scores,
                             const float *logits,

@@ -6,12 +6,22 @@
 //! Rules every function keeps: it never allocates, never panics and never aborts; it
 //! checks every pointer (NULL, alignment) and every length before touching memory, and
 //! returns an [`mlmap_status_t`]; it writes its outputs only on success (batches: the rows
-//! before a failing row). Inputs and outputs may overlap (scoring in place is fine):
-//! inputs are copied before any output is written.
+//! before a failing row).
+//!
+//! Aliasing (docs/DESIGN.md §5.1): no output may overlap the table storage the library
+//! uses, and no two outputs may overlap each other (`MLMAP_ERR_OVERLAP`, nothing
+//! written). A single-detection call copies its K logits before writing, so its scores
+//! may overlap the logits in any way; a batch cannot copy all of its rows, so its scores
+//! must either be exactly the logits (`out == logits`: each row is read before it is
+//! overwritten) or not overlap them, and must not overlap the objectness
+//! (`MLMAP_ERR_OVERLAP` otherwise). Every other call reads its inputs whole before it
+//! writes its one output.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![deny(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 #![allow(non_camel_case_types)]
+// The doc comments are the header's Doxygen comments: `@param[out]` is not a Rust link.
+#![allow(rustdoc::broken_intra_doc_links)]
 #![allow(clippy::missing_safety_doc)] // every entry point documents its contract in prose
 #![cfg_attr(
     not(test),
@@ -104,8 +114,9 @@ pub enum mlmap_status_t {
     MLMAP_ERR_STORAGE_TOO_SMALL = 3,
     /// The table storage holds no table: never decoded into, or the last decode failed.
     MLMAP_ERR_NO_TABLE = 4,
-    /// An output overlaps the table storage (the bytes decoded into it, or the
-    /// scores of a detection).
+    /// Memory that must be disjoint overlaps: an output (or the bytes to decode) and
+    /// the table storage; two outputs; or a batch's scores and its inputs, other than
+    /// scores written exactly over the logits (`out == logits`).
     MLMAP_ERR_OVERLAP = 5,
     /// Decode: the input is shorter than the smallest table.
     MLMAP_ERR_TRUNCATED = 6,
@@ -124,7 +135,7 @@ pub enum mlmap_status_t {
     MLMAP_ERR_MALFORMED = 12,
     /// Decode: the body parsed, but a table invariant does not hold.
     MLMAP_ERR_INVALID_TABLE = 13,
-    /// Scoring: a logit is NaN.
+    /// Scoring or decision: a logit is NaN.
     MLMAP_ERR_NAN_LOGIT = 14,
     /// Scoring: the objectness is NaN or outside [0, 1].
     MLMAP_ERR_OBJECTNESS = 15,
@@ -143,13 +154,15 @@ pub enum mlmap_status_t {
     /// A length is so large that it cannot describe memory (above `PTRDIFF_MAX`
     /// bytes).
     MLMAP_ERR_TOO_LARGE = 21,
+    /// Decision: a score is NaN.
+    MLMAP_ERR_NAN_SCORE = 22,
 }
 
 use mlmap_status_t::*;
 
 /// Statuses in code order (tests and `mlmap_status_str`).
 #[doc(hidden)]
-pub const ALL_STATUSES: [mlmap_status_t; 22] = [
+pub const ALL_STATUSES: [mlmap_status_t; 23] = [
     MLMAP_OK,
     MLMAP_ERR_NULL_POINTER,
     MLMAP_ERR_MISALIGNED,
@@ -172,6 +185,7 @@ pub const ALL_STATUSES: [mlmap_status_t; 22] = [
     MLMAP_ERR_CLASS_INDEX,
     MLMAP_ERR_NOT_FOUND,
     MLMAP_ERR_TOO_LARGE,
+    MLMAP_ERR_NAN_SCORE,
 ];
 
 impl From<DecodeError> for mlmap_status_t {
@@ -287,13 +301,41 @@ unsafe fn view<'a>(table: *const mlmap_table_t) -> Result<View<'a>, mlmap_status
         .ok_or(MLMAP_ERR_NO_TABLE)
 }
 
-/// Writes `value` through an output pointer.
+/// Writes `value` through an output pointer that has no table storage to overlap.
 #[inline(always)]
 unsafe fn put<T>(out: *mut T, value: T) -> Result<(), mlmap_status_t> {
     check_ptr(out)?;
     // SAFETY: non-NULL and aligned; the caller promises it points to a `T`.
     unsafe { out.write(value) };
     Ok(())
+}
+
+/// Refuses an output of `len` bytes at `out` that overlaps the part of the table
+/// storage the library uses.
+#[inline(always)]
+fn outside_table<T>(
+    out: *const T,
+    len: usize,
+    table: *const mlmap_table_t,
+) -> Result<(), mlmap_status_t> {
+    if overlap(out as usize, len, table as usize, size_of::<Storage>()) {
+        Err(MLMAP_ERR_OVERLAP)
+    } else {
+        Ok(())
+    }
+}
+
+/// Writes `value` through an output pointer, refusing one inside the table storage.
+#[inline(always)]
+unsafe fn put_outside<T>(
+    out: *mut T,
+    value: T,
+    table: *const mlmap_table_t,
+) -> Result<(), mlmap_status_t> {
+    check_ptr(out)?;
+    outside_table(out, size_of::<T>(), table)?;
+    // SAFETY: forwarded contract.
+    unsafe { put(out, value) }
 }
 
 /// The status of a result.
@@ -315,6 +357,7 @@ fn status(r: Result<(), mlmap_status_t>) -> mlmap_status_t {
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_limits(limits: *mut mlmap_limits_t) -> mlmap_status_t {
     #[cfg(feature = "canary")]
+    #[allow(clippy::panic)] // the canary's one reachable panic, on purpose
     if core::hint::black_box(limits as usize) == 1 {
         panic!("canary");
     }
@@ -337,14 +380,19 @@ pub unsafe extern "C" fn mlmap_limits(limits: *mut mlmap_limits_t) -> mlmap_stat
 /// function given it returns `MLMAP_ERR_NO_TABLE`. The bytes are not used after the
 /// call returns.
 ///
-/// Costs one pass over `table_size` bytes (zeroing) and one over the input; uses a
-/// few hundred bytes of stack.
+/// Work: zeroes the first `mlmap_limits().table_size` bytes of the storage (the rest of
+/// the `table_size` bytes is never read or written), computes the CRC-32 over the
+/// input, then parses it once into the storage and checks the invariants: time linear
+/// in `mlmap_limits().table_size` plus `len`; a few hundred bytes of stack.
 ///
 /// @param[out] table Storage for the table: a `mlmap_table_t`, aligned to
 ///   `MLMAP_TABLE_ALIGN` (a `static mlmap_table_t` is).
-/// @param table_size `sizeof` the storage, at least `mlmap_limits().table_size`.
-/// @param bytes The table's bytes; must not overlap the storage.
-/// @param len Number of bytes.
+/// @param table_size The size of the storage in bytes (`sizeof` it): at least
+///   `mlmap_limits().table_size` (`MLMAP_ERR_STORAGE_TOO_SMALL`), at most
+///   `PTRDIFF_MAX` and not past the end of the address space (`MLMAP_ERR_TOO_LARGE`).
+/// @param bytes The table's bytes; must not overlap the `table_size` bytes of the
+///   storage (`MLMAP_ERR_OVERLAP`).
+/// @param len Number of bytes, at most `PTRDIFF_MAX` (`MLMAP_ERR_TOO_LARGE`).
 /// @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
 ///   `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, and
 ///   each decode error: `MLMAP_ERR_TRUNCATED`, `MLMAP_ERR_NOT_A_TABLE`,
@@ -375,16 +423,21 @@ unsafe fn decode(
     if table_size < need {
         return Err(MLMAP_ERR_STORAGE_TOO_SMALL);
     }
-    if len > isize::MAX as usize {
+    // Both lengths must describe memory: at most `PTRDIFF_MAX` bytes, not past the end
+    // of the address space.
+    let (s, b) = (storage as usize, bytes as usize);
+    let describes_memory =
+        |at: usize, n: usize| n <= isize::MAX as usize && at.checked_add(n).is_some();
+    if !describes_memory(s, table_size) || !describes_memory(b, len) {
         return Err(MLMAP_ERR_TOO_LARGE);
     }
-    let (s, b) = (storage as usize, bytes as usize);
-    if b < s.saturating_add(need) && s < b.saturating_add(len) {
+    // The bytes must lie outside the whole storage the caller declared.
+    if overlap(s, table_size, b, len) {
         return Err(MLMAP_ERR_OVERLAP);
     }
     // SAFETY: `storage` is non-NULL, aligned and points to `table_size >= need` bytes
-    // the caller owns; all zeros is a valid `Storage` (tag 0: no table, and an empty
-    // table, see `ZEROED_TABLE_IS_VALID`).
+    // the caller owns, of which only the first `need` are written; all zeros is a valid
+    // `Storage` (tag 0: no table, and an empty table, see `ZEROED_TABLE_IS_VALID`).
     let storage = unsafe {
         ptr::write_bytes(storage, 0, 1);
         &mut *storage
@@ -400,24 +453,24 @@ unsafe fn decode(
 /// Gives the number of classes K of a decoded table.
 ///
 /// @param table A decoded table.
-/// @param[out] classes Receives K.
+/// @param[out] classes Receives K; must not lie in the table storage.
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
-///   `MLMAP_ERR_NO_TABLE`.
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`.
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_class_count(
     table: *const mlmap_table_t,
     classes: *mut usize,
 ) -> mlmap_status_t {
     // SAFETY: the caller passes a table storage and a `size_t` pointer (or NULL).
-    status(unsafe { view(table).and_then(|v| put(classes, v.k())) })
+    status(unsafe { view(table).and_then(|v| put_outside(classes, v.k(), table)) })
 }
 
 /// Gives the shape of a decoded table.
 ///
 /// @param table A decoded table.
-/// @param[out] shape Receives the shape.
+/// @param[out] shape Receives the shape; must not overlap the table storage.
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
-///   `MLMAP_ERR_NO_TABLE`.
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`.
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_shape(
     table: *const mlmap_table_t,
@@ -427,7 +480,7 @@ pub unsafe extern "C" fn mlmap_shape(
     status(unsafe {
         view(table).and_then(|v| {
             let bayes = v.bayes();
-            put(
+            put_outside(
                 shape,
                 mlmap_shape_t {
                     classes: v.k(),
@@ -436,6 +489,7 @@ pub unsafe extern "C" fn mlmap_shape(
                     bins_bayes: bayes.map_or(0, |b| b.bins()),
                     categories: bayes.map_or(0, |b| b.categories()),
                 },
+                table,
             )
         })
     })
@@ -444,9 +498,9 @@ pub unsafe extern "C" fn mlmap_shape(
 /// Gives the settings of a decoded table.
 ///
 /// @param table A decoded table.
-/// @param[out] settings Receives the settings.
+/// @param[out] settings Receives the settings; must not overlap the table storage.
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
-///   `MLMAP_ERR_NO_TABLE`.
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`.
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_settings(
     table: *const mlmap_table_t,
@@ -456,7 +510,7 @@ pub unsafe extern "C" fn mlmap_settings(
     status(unsafe {
         view(table).and_then(|v| {
             let s = v.settings();
-            put(
+            put_outside(
                 settings,
                 mlmap_settings_t {
                     lambda_ml: s.lambda_ml,
@@ -471,6 +525,7 @@ pub unsafe extern "C" fn mlmap_settings(
                         EdgeMode::Matlab => 1,
                     },
                 },
+                table,
             )
         })
     })
@@ -482,10 +537,12 @@ pub unsafe extern "C" fn mlmap_settings(
 ///
 /// @param table A decoded table.
 /// @param class_index The class, below K.
-/// @param[out] buf Receives the name and a NUL; untouched on failure.
+/// @param[out] buf Receives the name and a NUL; untouched on failure. The bytes it
+///   would receive must not overlap the table storage.
 /// @param buf_len Size of `buf` in bytes.
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
-///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_CLASS_INDEX`, `MLMAP_ERR_BUFFER_TOO_SMALL`.
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_CLASS_INDEX`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
+///   `MLMAP_ERR_OVERLAP`.
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_class_name(
     table: *const mlmap_table_t,
@@ -515,13 +572,14 @@ unsafe fn class_name(
     if n >= buf_len {
         return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
     }
-    // Copied out first: `buf` may point into the table storage itself.
+    outside_table(buf, n + 1, table)?;
     for (d, s) in name.iter_mut().zip(src) {
         *d = *s;
     }
-    // SAFETY: `n + 1 <= buf_len` bytes are writable at `buf`; `name` holds the name
-    // and at least one NUL after it (`n <= MLMAP_NAME_MAX`).
-    unsafe { ptr::copy(name.as_ptr(), buf.cast::<u8>(), n + 1) };
+    // SAFETY: `n + 1 <= buf_len` bytes are writable at `buf` and lie outside the table
+    // storage (checked); `name` is a local array holding the name and at least one NUL
+    // after it (`n <= MLMAP_NAME_MAX`).
+    unsafe { ptr::copy_nonoverlapping(name.as_ptr(), buf.cast::<u8>(), n + 1) };
     Ok(())
 }
 
@@ -530,9 +588,11 @@ unsafe fn class_name(
 /// @param table A decoded table.
 /// @param name The name's bytes.
 /// @param name_len Number of bytes of the name.
-/// @param[out] class_index Receives the class index.
+/// @param[out] class_index Receives the class index; must not lie in the table
+///   storage (it may overlap the name, which is read whole first).
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
-///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NOT_FOUND`.
+///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`,
+///   `MLMAP_ERR_NOT_FOUND`.
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_class_index(
     table: *const mlmap_table_t,
@@ -554,6 +614,7 @@ unsafe fn class_index_of(
     let v = unsafe { view(table) }?;
     check_ptr(name)?;
     check_ptr(class_index)?;
+    outside_table(class_index, size_of::<usize>(), table)?;
     if name_len > isize::MAX as usize {
         return Err(MLMAP_ERR_TOO_LARGE);
     }
@@ -563,7 +624,8 @@ unsafe fn class_index_of(
         .ok()
         .and_then(|s| v.class_index(s))
         .ok_or(MLMAP_ERR_NOT_FOUND)?;
-    // SAFETY: checked above.
+    // SAFETY: checked above (outside the table too); the name was read whole, so it
+    // may overlap the output.
     unsafe { put(class_index, found) }
 }
 
@@ -631,11 +693,13 @@ fn score(
     dispatch!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
 }
 
-/// Whether the byte ranges `[a, a + a_len)` and `[b, b + b_len)` overlap.
+/// Whether the byte ranges `[a, a + a_len)` and `[b, b + b_len)` share a byte (an empty
+/// range shares none).
 #[inline(always)]
 fn overlap(a: usize, a_len: usize, b: usize, b_len: usize) -> bool {
-    // `a` in `[b, b + b_len)` or `b` in `[a, a + a_len)`, without overflow.
-    a.wrapping_sub(b) < b_len || b.wrapping_sub(a) < a_len
+    // Both non-empty, and `a` in `[b, b + b_len)` or `b` in `[a, a + a_len)`, without
+    // overflow.
+    a_len != 0 && b_len != 0 && (a.wrapping_sub(b) < b_len || b.wrapping_sub(a) < a_len)
 }
 
 /// One detection through `head`: the checks of the C API around [`score`].
@@ -707,19 +771,20 @@ unsafe fn batch(
 ) -> Result<(), mlmap_status_t> {
     // SAFETY: forwarded contract.
     let v = unsafe { view(table) }?;
-    if !done.is_null() {
-        check_ptr(done)?;
-        // SAFETY: non-NULL, aligned, the caller's `size_t`.
-        unsafe { done.write(0) };
-    }
     check_ptr(logits)?;
     check_ptr(out)?;
     if !objectness.is_null() {
         check_ptr(objectness)?;
     }
+    if !done.is_null() {
+        check_ptr(done)?;
+    }
     let k = v.k();
     if n_logits != k {
         return Err(MLMAP_ERR_LENGTH);
+    }
+    if head == Head::Bayes && v.bayes().is_none() {
+        return Err(MLMAP_ERR_NO_BAYES_HEAD);
     }
     let total = rows.checked_mul(k).ok_or(MLMAP_ERR_TOO_LARGE)?;
     if total > isize::MAX as usize / size_of::<f32>() {
@@ -728,25 +793,45 @@ unsafe fn batch(
     if out_len < total {
         return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
     }
+    // Every pair that could alias, before anything is written. The scores may be
+    // written exactly over the logits (row `r` is read before row `r` is written, and
+    // no other row's logits are touched); any other overlap of the scores with an
+    // input would feed scores back in as inputs of later rows.
     let bytes = total * size_of::<f32>();
-    if overlap(out as usize, bytes, table as usize, size_of::<Storage>()) {
-        return Err(MLMAP_ERR_OVERLAP);
-    }
     let os_bytes = if objectness.is_null() {
         0
     } else {
         rows * size_of::<f32>()
     };
-    let in_place = overlap(out as usize, bytes, logits as usize, bytes)
-        || overlap(out as usize, bytes, objectness as usize, os_bytes);
+    let done_bytes = if done.is_null() {
+        0
+    } else {
+        size_of::<usize>()
+    };
+    let (o, d) = (out as usize, done as usize);
+    let in_place = out.cast_const() == logits;
+    if (!in_place && overlap(o, bytes, logits as usize, bytes))
+        || overlap(o, bytes, objectness as usize, os_bytes)
+        || overlap(d, done_bytes, o, bytes)
+        || overlap(d, done_bytes, logits as usize, bytes)
+        || overlap(d, done_bytes, objectness as usize, os_bytes)
+    {
+        return Err(MLMAP_ERR_OVERLAP);
+    }
+    outside_table(out, bytes, table)?;
+    outside_table(done, done_bytes, table)?;
+    if !done.is_null() {
+        // SAFETY: non-NULL, aligned, the caller's `size_t`, overlapping nothing else.
+        unsafe { done.write(0) };
+    }
     let mut x = [0.0f32; MAX_CLASSES];
     let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
     for r in 0..rows {
         let at = r * k;
         // SAFETY: row `r < rows` of `rows * k` readable floats at `logits`, and of as
-        // many writable ones at `out`; one readable float per row at `objectness`; the
-        // output never overlaps the table (checked). When it overlaps an input, each
-        // row's inputs are copied before its output is written.
+        // many writable ones at `out`; one readable float per row at `objectness`. The
+        // output overlaps neither the table, nor `done`, nor the objectness, and the
+        // logits only when it is exactly them: then the row is copied out first.
         unsafe {
             let os = if objectness.is_null() {
                 1.0
@@ -754,7 +839,7 @@ unsafe fn batch(
                 objectness.add(r).read()
             };
             let input: &[f32] = if in_place {
-                ptr::copy(logits.add(at), x.as_mut_ptr(), k);
+                ptr::copy_nonoverlapping(logits.add(at), x.as_mut_ptr(), k);
                 x
             } else {
                 core::slice::from_raw_parts(logits.add(at), k)
@@ -784,8 +869,9 @@ unsafe fn batch(
 /// @param n_logits Number of logits; must be K.
 /// @param objectness The detection's objectness, in [0, 1] (1 if the detector has
 ///   none).
-/// @param[out] out Receives the K scores; may be `logits` itself, must not overlap the
-///   table.
+/// @param[out] out Receives the K scores; may overlap `logits` in any way (the K
+///   logits are copied before any score is written), must not overlap the table
+///   storage.
 /// @param out_len Number of floats at `out`, at least K.
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
 ///   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
@@ -865,17 +951,24 @@ pub unsafe extern "C" fn mlmap_bayes(
 /// Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
 /// `objectness[r]` into row `r` of `out`.
 ///
-/// On a row that cannot be scored (NaN logit, bad objectness) the rows before it are
-/// written, the others untouched, its status is returned and `*done` is its index:
-/// resume at `*done + 1`.
+/// Every argument is checked before anything is written: on a failed check nothing
+/// is written, `*done` included. On a row that cannot be scored (NaN logit, bad
+/// objectness) the rows before it are written, the others untouched, its status is
+/// returned and `*done` is its index: resume at `*done + 1`.
+///
+/// Aliasing: the `rows * K` scores are either written exactly over the logits (`out
+/// == logits`: each row is read before it is overwritten) or must not overlap them at
+/// all; a batch does not copy its inputs, so a partial overlap (e.g. `out == logits +
+/// K`) is refused with `MLMAP_ERR_OVERLAP`. The scores must not overlap `objectness`
+/// nor the table storage, and `done` must not overlap the scores, the logits, the
+/// objectness nor the table storage (`MLMAP_ERR_OVERLAP`).
 ///
 /// @param table A decoded table.
 /// @param logits `rows * n_logits` floats, row-major.
 /// @param rows Number of detections (0 is allowed).
 /// @param n_logits Logits per row; must be K.
 /// @param objectness `rows` floats, or NULL for an objectness of 1 everywhere.
-/// @param[out] out Receives `rows * K` scores; may be `logits` itself, must not
-///   overlap the table.
+/// @param[out] out Receives `rows * K` scores; exactly `logits`, or disjoint from it.
 /// @param out_len Number of floats at `out`, at least `rows * K`.
 /// @param[out] done If not NULL, receives the number of rows written.
 /// @return As `mlmap_ml`, and `MLMAP_ERR_TOO_LARGE`.
@@ -907,7 +1000,7 @@ pub unsafe extern "C" fn mlmap_ml_batch(
     })
 }
 
-/// Scores a batch with the MAP head; see `mlmap_ml_batch`.
+/// Scores a batch with the MAP head; see `mlmap_ml_batch` (aliasing rules included).
 ///
 /// @param table A decoded table.
 /// @param logits `rows * n_logits` floats, row-major.
@@ -946,7 +1039,7 @@ pub unsafe extern "C" fn mlmap_map_batch(
     })
 }
 
-/// Scores a batch with the Bayes head; see `mlmap_ml_batch`.
+/// Scores a batch with the Bayes head; see `mlmap_ml_batch` (aliasing rules included).
 ///
 /// @param table A decoded table with a Bayes head.
 /// @param logits `rows * n_logits` floats, row-major.
@@ -987,16 +1080,22 @@ pub unsafe extern "C" fn mlmap_bayes_batch(
 
 /// The tie-safe decision (docs/DESIGN.md §1.7): the index of the largest score;
 /// among equal largest scores, the one with the largest logit; among those, the
-/// lowest index. NaN never wins. Use it instead of a plain argmax: a detection that
-/// every histogram calls "I don't know" gets equal scores, and the logits then keep
-/// the detector's ranking.
+/// lowest index. Use it instead of a plain argmax: a detection that every histogram
+/// calls "I don't know" gets equal scores, and the logits then keep the detector's
+/// ranking.
+///
+/// A NaN anywhere in the scores (`MLMAP_ERR_NAN_SCORE`) or in the logits
+/// (`MLMAP_ERR_NAN_LOGIT`) is an error, not a decision (docs/DESIGN.md §5.1); `±inf`
+/// is compared as any other value.
 ///
 /// @param scores The K scores of one detection.
 /// @param logits The same detection's K logits.
 /// @param k Number of scores and logits, at least 1.
-/// @param[out] class_index Receives the decided class.
+/// @param[out] class_index Receives the decided class; may overlap the inputs (they
+///   are read whole first).
 /// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
-///   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_TOO_LARGE`.
+///   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NAN_SCORE`,
+///   `MLMAP_ERR_NAN_LOGIT`.
 #[no_mangle]
 pub unsafe extern "C" fn mlmap_decide(
     scores: *const f32,
@@ -1031,8 +1130,17 @@ unsafe fn decide_c(
             core::slice::from_raw_parts(logits, k),
         )
     };
+    // No decision on NaN: the rule of §1.7 would answer a class (class 0 when every
+    // score is NaN) that nothing supports.
+    if s.iter().any(|v| v.is_nan()) {
+        return Err(MLMAP_ERR_NAN_SCORE);
+    }
+    if l.iter().any(|v| v.is_nan()) {
+        return Err(MLMAP_ERR_NAN_LOGIT);
+    }
     let i = decide(s, l);
-    // SAFETY: checked above.
+    // SAFETY: checked above; the inputs were read whole, so they may overlap the
+    // output.
     unsafe { put(class_index, i) }
 }
 
@@ -1049,7 +1157,7 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         2 => c"a pointer is not aligned for its type",
         3 => c"the table storage is smaller than the library needs (MLMAP_MAX_* differ from the library's build)",
         4 => c"the table storage holds no decoded table",
-        5 => c"an output or the table bytes overlap the table storage",
+        5 => c"memory that must be disjoint overlaps (an output and the table storage, two outputs, or a batch's scores and its inputs)",
         6 => c"input is too short to be an mlmap table",
         7 => c"input does not start with the mlmap magic MLMP",
         8 => c"table checksum does not match its contents",
@@ -1066,6 +1174,7 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         19 => c"class index is not below the number of classes",
         20 => c"no class has this name",
         21 => c"a length is too large to describe memory",
+        22 => c"a score is NaN",
         _ => c"unknown mlmap status",
     };
     s.as_ptr()

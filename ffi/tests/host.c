@@ -1,7 +1,9 @@
 /*
- * Host test of the C API (run by .ci/ffi.sh): every function, every status code, NULL
- * and short buffers, misaligned pointers, every single-byte corruption of a table, and
- * scores equal bit for bit to those `mlmap apply` wrote for the same rows.
+ * Host test of the C API (run by .ci/ffi.sh, also under ASan and UBSan): every function,
+ * every status code, NULL and short buffers, misaligned pointers, every single-byte
+ * corruption of a table, every aliasing rule of docs/DESIGN.md section 5.1 (outputs in
+ * the table storage, overlapping batch buffers), NaN given to mlmap_decide, and scores
+ * equal bit for bit to those `mlmap apply` wrote for the same rows.
  *
  * usage: host TABLE SMALL_TABLE INPUT_CSV APPLY_CSV
  *   TABLE        a table with a Bayes head (tables/default.mlmap)
@@ -110,10 +112,10 @@ static void test_limits_and_status_strings(void) {
     /* Every status has its own non-empty description; anything else is unknown. */
     const char *unknown = mlmap_status_str(-1);
     CHECK(unknown != NULL && strcmp(unknown, "unknown mlmap status") == 0);
-    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_TOO_LARGE + 1), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_NAN_SCORE + 1), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MAX), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MIN), unknown) == 0);
-    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_TOO_LARGE; s++) {
+    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_NAN_SCORE; s++) {
         const char *d = mlmap_status_str(s);
         CHECK(d != NULL && d[0] != '\0' && strcmp(d, unknown) != 0);
         for (int32_t t = MLMAP_OK; t < s; t++) CHECK(strcmp(d, mlmap_status_str(t)) != 0);
@@ -455,9 +457,6 @@ static void test_decide(void) {
     float t2[3] = {0.5f, 0.2f, 0.5f}, l3[3] = {1.0f, 5.0f, 1.0f};
     EXPECT(mlmap_decide(t2, l3, 3, &c), MLMAP_OK);
     CHECK(c == 0); /* scores and logits tie: the lowest index */
-    float nan_s[3] = {NAN, 0.2f, 0.1f};
-    EXPECT(mlmap_decide(nan_s, lg, 3, &c), MLMAP_OK);
-    CHECK(c == 1);
     EXPECT(mlmap_decide(eq, lg, 1, &c), MLMAP_OK);
     CHECK(c == 0);
     c = 99;
@@ -468,6 +467,217 @@ static void test_decide(void) {
     EXPECT(mlmap_decide(eq, NULL, 3, &c), MLMAP_ERR_NULL_POINTER);
     EXPECT(mlmap_decide(eq, lg, 3, NULL), MLMAP_ERR_NULL_POINTER);
     EXPECT(mlmap_decide((const float *)((const char *)eq + 2), lg, 2, &c), MLMAP_ERR_MISALIGNED);
+}
+
+/* NaN is never decided on: a NaN score or logit is an error, and the output is
+ * untouched. */
+static void test_decide_nan(void) {
+    float lg[3] = {-1.0f, 2.5f, 0.4f}, s[3] = {0.1f, 0.7f, 0.2f};
+    float all_nan[3] = {NAN, NAN, NAN}, one_nan[3] = {NAN, 0.2f, 0.1f};
+    float last_nan[3] = {0.1f, 0.2f, NAN}, lg_nan[3] = {-1.0f, NAN, 0.4f};
+    size_t c = 99;
+    EXPECT(mlmap_decide(all_nan, lg, 3, &c), MLMAP_ERR_NAN_SCORE);
+    CHECK(c == 99);
+    EXPECT(mlmap_decide(one_nan, lg, 3, &c), MLMAP_ERR_NAN_SCORE);
+    EXPECT(mlmap_decide(last_nan, lg, 3, &c), MLMAP_ERR_NAN_SCORE);
+    EXPECT(mlmap_decide(all_nan, lg, 1, &c), MLMAP_ERR_NAN_SCORE);
+    CHECK(c == 99);
+    EXPECT(mlmap_decide(s, lg_nan, 3, &c), MLMAP_ERR_NAN_LOGIT);
+    EXPECT(mlmap_decide(s, all_nan, 3, &c), MLMAP_ERR_NAN_LOGIT);
+    EXPECT(mlmap_decide(all_nan, all_nan, 3, &c), MLMAP_ERR_NAN_SCORE);
+    CHECK(c == 99);
+    /* Infinities are values: +inf wins, -inf loses. */
+    float inf_s[3] = {-INFINITY, INFINITY, 0.5f}, inf_l[3] = {INFINITY, -INFINITY, 0.0f};
+    EXPECT(mlmap_decide(inf_s, inf_l, 3, &c), MLMAP_OK);
+    CHECK(c == 1);
+    /* The output may overlap the inputs: they are read whole first. */
+    union {
+        size_t c;
+        float f[4];
+    } u = {.f = {0.1f, 0.2f, 0.7f, 0.0f}};
+    float lg4[3] = {0.0f, 0.0f, 0.0f};
+    EXPECT(mlmap_decide(u.f, lg4, 3, &u.c), MLMAP_OK);
+    CHECK(u.c == 2);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_NAN_SCORE), "a score is NaN") == 0);
+}
+
+/* `table_size` is the size of the storage: a size that cannot describe memory is
+ * refused, and the bytes must lie outside all of it, not only outside the part the
+ * library uses. */
+static void test_decode_table_size(const uint8_t *bytes, size_t len) {
+    mlmap_limits_t l;
+    mlmap_limits(&l);
+    static union {
+        mlmap_table_t t;
+        uint8_t raw[sizeof(mlmap_table_t) + 4096];
+    } big;
+    EXPECT(mlmap_table_decode(&big.t, SIZE_MAX, bytes, len), MLMAP_ERR_TOO_LARGE);
+    EXPECT(mlmap_table_decode(&big.t, (size_t)PTRDIFF_MAX + 1, bytes, len), MLMAP_ERR_TOO_LARGE);
+    test_no_table(&big.t);
+    /* Bytes in the declared storage, after the part the library uses. */
+    uint8_t *tail = big.raw + l.table_size;
+    CHECK(l.table_size + len <= sizeof big.raw);
+    memcpy(tail, bytes, len);
+    EXPECT(mlmap_table_decode(&big.t, sizeof big.raw, tail, len), MLMAP_ERR_OVERLAP);
+    test_no_table(&big.t);
+    /* The same bytes with a storage declared to end before them decode, and the
+     * bytes after the part the library uses are never written. */
+    memset(big.raw + l.table_size, 0x5a, sizeof big.raw - l.table_size);
+    uint8_t *copy = malloc(len);
+    memcpy(copy, bytes, len);
+    EXPECT(mlmap_table_decode(&big.t, l.table_size, copy, len), MLMAP_OK);
+    EXPECT(mlmap_table_decode(&big.t, sizeof big.raw, copy, len), MLMAP_OK);
+    size_t untouched = 0;
+    for (size_t i = l.table_size; i < sizeof big.raw; i++) untouched += big.raw[i] == 0x5a;
+    CHECK(untouched == sizeof big.raw - l.table_size);
+    free(copy);
+}
+
+/* Outputs inside the table storage are refused with nothing written: every output
+ * of every function that has a table. */
+static void test_outputs_in_table(const mlmap_table_t *t) {
+    static mlmap_table_t victim, before;
+    mlmap_limits_t l;
+    mlmap_limits(&l);
+    memcpy(&victim, t, sizeof victim);
+    memcpy(&before, t, sizeof before);
+    /* 8-aligned places in the part of the storage the library uses: near the start,
+     * in the middle, the last word. */
+    size_t offsets[3] = {64, l.table_size / 2 / 8 * 8, l.table_size - 8};
+    float x[3] = {1.0f, -2.0f, 0.5f}, os[1] = {0.5f}, out[3];
+    for (int i = 0; i < 3; i++) {
+        char *in = (char *)&victim + offsets[i];
+        EXPECT(mlmap_class_count(&victim, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_class_index(&victim, "cyclist", 7, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_class_name(&victim, 1, in, MLMAP_NAME_MAX + 1), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_ml_batch(&victim, x, 1, 3, os, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_bayes_batch(&victim, x, 1, 3, NULL, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_map(&victim, x, 3, 1.0f, (float *)in, 3), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_bayes_batch(&victim, x, 1, 3, NULL, (float *)in, 3, NULL), MLMAP_ERR_OVERLAP);
+        if (offsets[i] + sizeof(mlmap_shape_t) <= l.table_size) {
+            EXPECT(mlmap_shape(&victim, (mlmap_shape_t *)in), MLMAP_ERR_OVERLAP);
+            EXPECT(mlmap_settings(&victim, (mlmap_settings_t *)in), MLMAP_ERR_OVERLAP);
+        }
+    }
+    /* Straddling the start of the storage. */
+    static union {
+        size_t align;
+        struct {
+            uint8_t pad[16];
+            mlmap_table_t t;
+        } s;
+    } lead;
+    memcpy(&lead.s.t, t, sizeof lead.s.t);
+    EXPECT(mlmap_shape(&lead.s.t, (mlmap_shape_t *)(lead.s.pad + 8)), MLMAP_ERR_OVERLAP);
+    EXPECT(mlmap_class_name(&lead.s.t, 1, (char *)lead.s.pad + 12, 8), MLMAP_ERR_OVERLAP);
+    EXPECT(mlmap_class_name(&lead.s.t, 0, (char *)lead.s.pad + 12, 4), MLMAP_OK);
+    mlmap_shape_t sh;
+    EXPECT(mlmap_shape(&lead.s.t, &sh), MLMAP_OK);
+    CHECK(sh.classes == 3);
+    CHECK(memcmp(&victim, &before, sizeof victim) == 0);
+    /* And the table still scores as before. */
+    float a[3], b[3];
+    EXPECT(mlmap_bayes(&victim, x, 3, 1.0f, a, 3), MLMAP_OK);
+    EXPECT(mlmap_bayes(t, x, 3, 1.0f, b, 3), MLMAP_OK);
+    CHECK(memcmp(a, b, sizeof a) == 0);
+}
+
+/* Batch aliasing: exactly in place or disjoint; every other overlap of the scores
+ * with an input, and of `done` with anything, is refused with nothing written. */
+static void test_batch_overlap(const mlmap_table_t *t, batch_fn batch, const char *head) {
+    enum { R = 4, K = 3 };
+    static const float rows[R][K] = {{1, 2, 3}, {-1, 0, 4}, {0.5f, -3, 2}, {2, 2, -2}};
+    static const float os[R] = {1.0f, 0.5f, 0.25f, 0.75f};
+    float want[R][K];
+    fprintf(stderr, "-- %s batch overlaps\n", head);
+    EXPECT(batch(t, &rows[0][0], R, K, os, &want[0][0], R * K, NULL), MLMAP_OK);
+
+    /* Scores one row after the logits (out = logits + K), and one row before. */
+    float buf[(R + 1) * K], keep[(R + 1) * K];
+    size_t done = 99;
+    for (int shift = -K; shift <= K; shift += 2 * K) {
+        float *logits = buf + (shift > 0 ? 0 : K), *out = logits + shift;
+        memcpy(logits, rows, sizeof rows);
+        memcpy(keep, buf, sizeof buf);
+        EXPECT(batch(t, logits, R, K, os, out, R * K, &done), MLMAP_ERR_OVERLAP);
+        CHECK(memcmp(buf, keep, sizeof buf) == 0 && done == 99);
+    }
+    /* One float after the logits. */
+    memcpy(buf, rows, sizeof rows);
+    memcpy(keep, buf, sizeof buf);
+    EXPECT(batch(t, buf, R, K, os, buf + 1, R * K, &done), MLMAP_ERR_OVERLAP);
+    CHECK(memcmp(buf, keep, sizeof buf) == 0 && done == 99);
+
+    /* The objectness inside the scores. */
+    float out[R * K + R], lg[R][K];
+    memcpy(lg, rows, sizeof rows);
+    for (int pos = 0; pos <= R * K - R; pos += R * K - R) {
+        for (int i = 0; i < R * K + R; i++) out[i] = -7.0f;
+        memcpy(out + pos, os, sizeof os);
+        float kept[R * K + R];
+        memcpy(kept, out, sizeof out);
+        EXPECT(batch(t, &lg[0][0], R, K, out + pos, out, R * K, &done), MLMAP_ERR_OVERLAP);
+        CHECK(memcmp(out, kept, sizeof out) == 0 && done == 99);
+    }
+    /* The objectness inside the logits, scored in place: refused too. */
+    float both[R * K];
+    memcpy(both, rows, sizeof rows);
+    EXPECT(batch(t, both, R, K, both + 4, both, R * K, &done), MLMAP_ERR_OVERLAP);
+    CHECK(memcmp(both, rows, sizeof rows) == 0 && done == 99);
+
+    /* `done` inside the scores, the logits or the objectness. */
+    static union {
+        size_t align;
+        float f[2 * R * K + R];
+    } m;
+    float *ml = m.f, *mo = m.f + R * K, *mos = m.f + 2 * R * K;
+    size_t *in_out = (size_t *)(void *)(mo + 2), *in_lg = (size_t *)(void *)(ml + 4),
+           *in_os = (size_t *)(void *)(mos + 2);
+    size_t *places[3] = {in_out, in_lg, in_os};
+    for (int i = 0; i < 3; i++) {
+        memcpy(ml, rows, sizeof rows);
+        for (int j = 0; j < R * K; j++) mo[j] = -7.0f;
+        memcpy(mos, os, sizeof os);
+        float kept[2 * R * K + R];
+        memcpy(kept, m.f, sizeof kept);
+        EXPECT(batch(t, ml, R, K, mos, mo, R * K, places[i]), MLMAP_ERR_OVERLAP);
+        CHECK(memcmp(m.f, kept, sizeof kept) == 0);
+    }
+
+    /* Nothing is written on an argument error, not even `*done`. */
+    done = 99;
+    EXPECT(batch(t, &rows[0][0], R, K, os, out, R * K - 1, &done), MLMAP_ERR_BUFFER_TOO_SMALL);
+    CHECK(done == 99);
+
+    /* Exactly in place, and disjoint next to each other: the scores of a separate
+     * buffer, bit for bit. */
+    float inplace[R * K];
+    memcpy(inplace, rows, sizeof rows);
+    EXPECT(batch(t, inplace, R, K, os, inplace, R * K, &done), MLMAP_OK);
+    CHECK(done == R);
+    for (int i = 0; i < R * K; i++) CHECK(same_bits(inplace[i], (&want[0][0])[i]));
+    float adj[2 * R * K];
+    memcpy(adj, rows, sizeof rows);
+    EXPECT(batch(t, adj, R, K, os, adj + R * K, R * K, &done), MLMAP_OK);
+    for (int i = 0; i < R * K; i++) CHECK(same_bits(adj[R * K + i], (&want[0][0])[i]));
+    memcpy(adj + R * K, rows, sizeof rows);
+    EXPECT(batch(t, adj + R * K, R, K, os, adj, R * K, &done), MLMAP_OK);
+    for (int i = 0; i < R * K; i++) CHECK(same_bits(adj[i], (&want[0][0])[i]));
+}
+
+/* A single detection copies its K logits first: any overlap of the scores with them
+ * gives the scores of a separate buffer. */
+static void test_one_overlap(const mlmap_table_t *t, one_fn one, const char *head) {
+    const float x[3] = {1.0f, -2.0f, 0.5f};
+    float want[3], buf[7];
+    fprintf(stderr, "-- %s single-detection overlaps\n", head);
+    EXPECT(one(t, x, 3, 0.5f, want, 3), MLMAP_OK);
+    for (int shift = -2; shift <= 2; shift++) {
+        float *logits = buf + 2, *out = logits + shift;
+        memcpy(logits, x, sizeof x);
+        EXPECT(one(t, logits, 3, 0.5f, out, 3), MLMAP_OK);
+        for (int i = 0; i < 3; i++) CHECK(same_bits(out[i], want[i]));
+    }
 }
 
 /* Splits a CSV line in place (no quoting in these files). */
@@ -596,6 +806,15 @@ int main(int argc, char **argv) {
     test_head_arguments(&table, mlmap_map, mlmap_map_batch, "MAP");
     test_head_arguments(&table, mlmap_bayes, mlmap_bayes_batch, "Bayes");
     test_decide();
+    test_decide_nan();
+    test_decode_table_size(bytes, len);
+    test_outputs_in_table(&table);
+    test_batch_overlap(&table, mlmap_ml_batch, "ML");
+    test_batch_overlap(&table, mlmap_map_batch, "MAP");
+    test_batch_overlap(&table, mlmap_bayes_batch, "Bayes");
+    test_one_overlap(&table, mlmap_ml, "ML");
+    test_one_overlap(&table, mlmap_map, "MAP");
+    test_one_overlap(&table, mlmap_bayes, "Bayes");
     test_against_apply(&table, argv[3], argv[4]);
 
     /* A version-1 table has no Bayes head. */
@@ -610,6 +829,10 @@ int main(int argc, char **argv) {
     float x[3] = {0.5f, 1.0f, -1.0f}, out[3];
     EXPECT(mlmap_bayes(&small_t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_BAYES_HEAD);
     EXPECT(mlmap_bayes_batch(&small_t, x, 1, 3, NULL, out, 3, NULL), MLMAP_ERR_NO_BAYES_HEAD);
+    /* Even for no rows: the head is checked with the arguments. */
+    size_t done = 99;
+    EXPECT(mlmap_bayes_batch(&small_t, x, 0, 3, NULL, out, 0, &done), MLMAP_ERR_NO_BAYES_HEAD);
+    CHECK(done == 99);
     EXPECT(mlmap_ml(&small_t, x, 3, 1.0f, out, 3), MLMAP_OK);
 
     free(bytes);

@@ -166,8 +166,13 @@ fuzz_target!(|data: &[u8]| {
         if n_logits > 0 && logits.len() >= n_logits {
             // SAFETY: n_logits floats each.
             let s = unsafe { mlmap_decide(logits.as_ptr(), logits.as_ptr(), n_logits, &mut idx) };
-            assert_eq!(s, MLMAP_OK);
-            assert!(idx < n_logits);
+            // A NaN score is refused (here the scores are the logits).
+            if logits[..n_logits].iter().any(|v| v.is_nan()) {
+                assert_eq!(s, MLMAP_ERR_NAN_SCORE);
+            } else {
+                assert_eq!(s, MLMAP_OK);
+                assert!(idx < n_logits);
+            }
         }
     }
 });
