@@ -128,7 +128,9 @@ pub fn data_set(classes: &[String], obj: &Bound<'_, PyAny>, name: &str) -> PyRes
 /// the table's class names in order.
 #[pyfunction]
 #[pyo3(signature = (table, logits, labels, objectness=None, *, val=None, ood=None,
-                    ece_bins=arrays::Count::new(10), ece_binning="design", classes=None))]
+                    ece_bins=arrays::Count::new(10), ece_binning="design", classes=None),
+    text_signature = "(table, logits, labels, objectness=None, *, val=None, ood=None, \
+                      ece_bins=10, ece_binning='design', classes=None)")]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate<'py>(
     py: Python<'py>,

@@ -358,7 +358,10 @@ fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
 #[pyfunction]
 #[pyo3(signature = (logits, labels, objectness=None, *, classes=None, bins_ml=Count::new(22),
                     lambda_ml=None, bins_map=Count::new(17), lambda_map=None, edges="linspace",
-                    tail="zero", bayes=BayesArg::DEFAULT))]
+                    tail="zero", bayes=BayesArg::DEFAULT),
+    text_signature = "(logits, labels, objectness=None, *, classes=None, bins_ml=22, \
+                      lambda_ml=None, bins_map=17, lambda_map=None, edges='linspace', \
+                      tail='zero', bayes=True)")]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
     py: Python<'py>,
@@ -514,8 +517,9 @@ impl PyFitStats {
     /// The edges of every histogram for a fit with these settings (the keywords of
     /// `mlmap.fit`): what pass (b) counts against.
     #[pyo3(signature = (*, bins_ml=Count::new(22), lambda_ml=None, bins_map=Count::new(17),
-                        lambda_map=None,
-                        edges="linspace", tail="zero", bayes=BayesArg::DEFAULT))]
+                        lambda_map=None, edges="linspace", tail="zero", bayes=BayesArg::DEFAULT),
+        text_signature = "($self, *, bins_ml=22, lambda_ml=None, bins_map=17, \
+                          lambda_map=None, edges='linspace', tail='zero', bayes=True)")]
     #[allow(clippy::too_many_arguments)]
     fn edges(
         &self,
@@ -657,7 +661,13 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
                     bayes=true, lambda_min=1e-8, lambda_max=1e-1,
                     lambdas_per_decade=Count::new(3),
                     lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
-                    max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5)))]
+                    max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5)),
+    text_signature = "(logits, labels, val, objectness=None, *, ood=None, classes=None, \
+                      objective='ece', bins_ml=None, bins_map=None, bins_bayes=None, \
+                      bayes=True, lambda_min=1e-8, lambda_max=1e-1, lambdas_per_decade=3, \
+                      lambda_bayes_min=None, lambda_bayes_max=None, \
+                      max_accuracy_loss=0.005, max_map_loss=0.01, edges='linspace', \
+                      tail='zero', top=5)")]
 #[allow(clippy::too_many_arguments)]
 pub fn tune<'py>(
     py: Python<'py>,

@@ -341,6 +341,19 @@ def test_integer_settings_out_of_range_raise_value_error(call, message):
     assert type(e.value) is ValueError  # not OverflowError, not a panic
 
 
+def test_signatures_show_the_integer_defaults():
+    import inspect
+
+    def defaults(f):
+        return {k: p.default for k, p in inspect.signature(f).parameters.items()}
+
+    assert defaults(mlmap.fit)["bins_ml"] == 22 and defaults(mlmap.fit)["bins_map"] == 17
+    assert defaults(mlmap.fit)["bayes"] is True
+    assert defaults(mlmap.FitStats.edges)["bins_ml"] == 22
+    assert defaults(mlmap.tune)["lambdas_per_decade"] == 3 and defaults(mlmap.tune)["top"] == 5
+    assert defaults(mlmap.evaluate)["ece_bins"] == 10
+
+
 def test_non_integer_settings_raise_type_error():
     x = np.array([[2.0, -1.0, 0.5], [0.0, 3.0, -1.0], [1.0, 0.0, 2.5]])
     with pytest.raises(TypeError, match="bins_ml"):
