@@ -422,7 +422,7 @@ macro_rules! mergeable {
                 PyBytes::new(py, &self.inner.to_bytes())
             }
 
-            /// Reads [`to_bytes`]'s output; a corrupt, truncated or newer input raises
+            /// Reads `to_bytes`'s output; a corrupt, truncated or newer input raises
             /// `ValueError`.
             #[staticmethod]
             fn from_bytes(data: &Bound<'_, PyAny>) -> PyResult<Self> {

@@ -3,7 +3,7 @@
 //! fit statistics, all on the library `mlmap` (feature `std`).
 //!
 //! Nothing here may panic on input: every array is checked at the boundary
-//! ([`arrays`]) and every failure is a Python exception ([`errors`]).
+//! (`arrays`) and every failure is a Python exception (`errors`).
 
 #![deny(
     clippy::unwrap_used,
