@@ -504,3 +504,30 @@ def test_a_bad_quantized_section_is_refused(small):
     other = mlmap.fit(*small["train"], classes=CLASSES).to_bytes()
     with pytest.raises(mlmap.TableError, match="^quantized section: "):
         mlmap.Table.from_bytes(other + section)
+
+
+# --- The parallel paths -------------------------------------------------------------
+
+
+def test_large_arrays_in_odd_layouts_equal_the_contiguous_copy(table, data):
+    """Enough rows that scoring runs on the thread pool (from 65,536 rows) and the fit
+    splits its passes into ranges (from 262,144 rows)."""
+    tr = data["train"]
+    reps = 300_000 // len(tr) + 1
+    x, y = np.tile(tr.logits, (reps, 1)), np.tile(tr.labels, reps)
+    os = np.tile(tr.objectness, reps)
+    assert len(x) > 262_144
+    want_fit = mlmap.fit(x, y, os, classes=CLASSES).to_bytes()
+    want_scores = {h: table.scores(h, x, os) for h in mlmap.HEADS}
+    for layout in ("unaligned", "field+1", "fortran"):
+        vx, vy, vos = (variants(a)[layout] for a in (x, y, os))
+        assert mlmap.fit(vx, vy, vos, classes=CLASSES).to_bytes() == want_fit, layout
+        for head in mlmap.HEADS:
+            assert np.array_equal(bits(table.scores(head, vx, vos)), bits(want_scores[head]))
+    # The first bad row of a parallel pass is the one reported, in any layout.
+    bad = x.copy()
+    bad[200_000, 2] = np.nan
+    with pytest.raises(ValueError, match=r"^logits: row index 200000: logit of class 2 is NaN$"):
+        table.ml(unaligned(bad))
+    with pytest.raises(ValueError, match=r'^logits: row index 200000: column "pedestrian": "NaN"'):
+        mlmap.fit(field(bad, 1), y, classes=CLASSES)
