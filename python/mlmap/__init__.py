@@ -5,13 +5,18 @@ A table is fitted from training logits (``mlmap.fit``), tuned on validation data
 scores numpy arrays with the device's own ``f32`` code (``Table.ml``, ``Table.map``,
 ``Table.bayes``). ``mlmap.evaluate`` reports every calibration metric of every method.
 
-Arrays: logits are ``(N, K)`` float32 or float64, in any memory order (a PyTorch tensor
-via ``tensor.numpy()``); labels are ``(N,)`` integers, ``0 .. K-1`` a class (the table's
+Arrays: logits are ``(N, K)`` float32 or float64 (a PyTorch tensor via
+``tensor.numpy()``); labels are ``(N,)`` integers, ``0 .. K-1`` a class (the table's
 order) and ``-1`` background (a detection that matched no object); objectness is
-``None`` (1.0), a number, or an ``(N,)`` float array in ``[0, 1]``.
+``None`` (1.0), a number, or an ``(N,)`` float array in ``[0, 1]``. Any layout is
+accepted: a C-contiguous, aligned array is read in place, and any other (Fortran order,
+strided, reversed or unaligned views, fields of structured arrays, byte-swapped or other
+dtypes of the same kind) is copied once, with the same result.
 
-Bad input raises ``ValueError`` with the message the ``mlmap`` command prints for the
-same fault; a corrupt table raises ``mlmap.TableError``, a ``ValueError``.
+Bad input, an integer setting out of range included, raises ``ValueError`` with the
+message the ``mlmap`` command prints for the same fault; a corrupt table raises
+``mlmap.TableError``, a ``ValueError``; an argument of the wrong type raises
+``TypeError``. A NaN score or logit given to ``decide`` is a ``ValueError``.
 
 Fitting across processes or machines (docs/SCALE.md): ``FitStats`` (pass a) of every
 shard, merged (``+``, ``sum``); its ``edges(...)``; ``FitCounts`` (pass b) of every shard

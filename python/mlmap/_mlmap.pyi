@@ -9,13 +9,19 @@ import numpy.typing as npt
 FORMAT_VERSION: int
 
 HeadName = Literal["ml", "map", "bayes"]
-#: `(N, K)` float32 or float64 logits (any memory order), or anything `numpy.asarray`
-#: turns into such an array.
+#: `(N, K)` float logits, or anything `numpy.asarray` turns into such an array. A
+#: C-contiguous, aligned float32 or float64 array is read in place; any other layout
+#: (Fortran order, strided, reversed or unaligned views, fields of structured arrays,
+#: byte-swapped or other float dtypes) is copied once, with the same result.
 Logits = npt.ArrayLike
 #: `None` (1.0 for every row), a number, or an `(N,)` float array, in `[0, 1]`.
 Objectness = Union[None, float, npt.ArrayLike]
-#: `(N,)` integers: `0 .. K-1` a class in the table's order, `-1` background.
+#: `(N,)` integers of any width and byte order, any layout: `0 .. K-1` a class in the
+#: table's order, `-1` background.
 Labels = npt.ArrayLike
+#: The bytes of a file: `bytes`, `bytearray`, a `memoryview` or any C-contiguous buffer
+#: of single bytes (a numpy `uint8` array); anything else raises `TypeError`.
+Buffer = Union[bytes, bytearray, memoryview, npt.NDArray[np.uint8]]
 PathLike = Union[str, "os.PathLike[str]"]
 
 class TableError(ValueError):
@@ -27,18 +33,27 @@ class Table:
 
     Scoring runs the device's `f32` code on every row: the scores are bit for bit those
     of the firmware and of `mlmap apply`.
+
+    A file with a quantized section (`mlmap quantize`) keeps it: the section is checked,
+    described by `quantized`, and written back unchanged by `to_bytes`, `save` and
+    pickling; scoring runs the float table.
     """
 
     @staticmethod
-    def from_bytes(data: Union[bytes, bytearray]) -> "Table":
-        """Decodes the bytes of a `.mlmap` file; raises `TableError` when invalid."""
+    def from_bytes(data: Buffer) -> "Table":
+        """Decodes the bytes of a `.mlmap` file (a quantized section is checked and
+        kept); raises `TableError` when invalid, `TypeError` for a non-buffer or a
+        non-contiguous buffer."""
     def to_bytes(self) -> bytes:
-        """The table's bytes (the `.mlmap` file format)."""
+        """The file's bytes (the `.mlmap` file format): the table, then its quantized
+        section when it was read with one."""
     @staticmethod
     def load(path: PathLike) -> "Table":
-        """Reads a `.mlmap` file (`FileNotFoundError`, `TableError`, ...)."""
+        """Reads a `.mlmap` file, keeping a quantized section (`FileNotFoundError`,
+        `TableError`, ...)."""
     def save(self, path: PathLike) -> None:
-        """Writes the table, through a temporary file renamed into place."""
+        """Writes the file (with its quantized section, if any), through a temporary
+        file renamed into place."""
     @property
     def classes(self) -> List[str]:
         """Class names, in column order."""
@@ -76,11 +91,16 @@ class Table:
         """`(mean, variance)` of the MAP head's Gaussian prior, per class."""
     @property
     def size(self) -> int:
-        """Size of the encoded table in bytes."""
+        """`len(to_bytes())`: the encoded table and its quantized section, if any."""
+    @property
+    def quantized(self) -> Optional[Dict[str, Any]]:
+        """The quantized section the table was read with: `None`, or `{"bits": 8 or 16,
+        "size": bytes, "heads": ("ml", "map"[, "bayes"])}`."""
     def histogram(
         self, head: Literal["ml", "map"], cls: Union[int, str]
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
-        """`(edges, frequencies)` of a class's histogram: `B + 1` edges, `B` values."""
+        """`(edges, frequencies)` of a class's histogram: `B + 1` edges, `B` values.
+        A class index outside `0 .. K-1` raises `ValueError`."""
     def ml(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` ML scores; each row sums to its objectness."""
     def map(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
@@ -96,7 +116,8 @@ class Table:
     def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
 
 def decide(scores: npt.ArrayLike, logits: Logits) -> npt.NDArray[np.int64]:
-    """The decided class of every row: the largest score, ties to the larger logit."""
+    """The decided class of every row: the largest score, ties to the larger logit.
+    A NaN score or logit raises `ValueError` (no class can be said to win)."""
 
 def evaluate(
     table: Table,
@@ -110,7 +131,8 @@ def evaluate(
     ece_binning: Literal["design", "default", "netcal", "torchmetrics"] = "design",
     classes: Optional[Sequence[str]] = None,
 ) -> Dict[str, Any]:
-    """Every metric of every method, as `mlmap eval --format json` reports them."""
+    """Every metric of every method, as `mlmap eval --format json` reports them.
+    `ece_bins` outside `1 .. 2**20` raises `ValueError`."""
 
 #: The `bayes` keyword: `True` (the default head: 22 bins, lambda 1e-3), `False` or
 #: `None` (no Bayes head), or `{"bins": int, "lambda": float}`.
@@ -131,7 +153,8 @@ def fit(
     bayes: BayesSetting = True,
 ) -> Table:
     """Fits a table (the bytes `mlmap fit` writes on the same rows). Lambdas default to
-    0.0055 (ML) and 0.00012 (MAP); classes to `class0` .. `class{K-1}`."""
+    0.0055 (ML) and 0.00012 (MAP); classes to `class0` .. `class{K-1}`. A bin count
+    outside `1 .. 65535` (negative ones too) raises `ValueError`."""
 
 def tune(
     logits: Logits,
@@ -158,7 +181,9 @@ def tune(
     top: int = 5,
 ) -> Tuple[Table, Dict[str, Any]]:
     """Searches bins (default 4..40 per head) and lambdas on `val=(logits, labels[,
-    objectness])`; returns the table and the report of `mlmap tune --format json`."""
+    objectness])`; returns the table and the report of `mlmap tune --format json`.
+    Bin counts outside `1 .. 65535`, `lambdas_per_decade` outside `1 .. 1000` and a
+    negative `top` raise `ValueError`."""
 
 @final
 class FitStats:
@@ -198,7 +223,7 @@ class FitStats:
     def __radd__(self, other: Union["FitStats", int], /) -> "FitStats": ...
     def to_bytes(self) -> bytes: ...
     @staticmethod
-    def from_bytes(data: Union[bytes, bytearray]) -> "FitStats": ...
+    def from_bytes(data: Buffer) -> "FitStats": ...
     def __eq__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
 
@@ -210,7 +235,7 @@ class FitEdges:
     def classes(self) -> List[str]: ...
     def to_bytes(self) -> bytes: ...
     @staticmethod
-    def from_bytes(data: Union[bytes, bytearray]) -> "FitEdges": ...
+    def from_bytes(data: Buffer) -> "FitEdges": ...
     def __eq__(self, other: object, /) -> bool: ...
 
 @final
@@ -229,7 +254,7 @@ class FitCounts:
     def __radd__(self, other: Union["FitCounts", int], /) -> "FitCounts": ...
     def to_bytes(self) -> bytes: ...
     @staticmethod
-    def from_bytes(data: Union[bytes, bytearray]) -> "FitCounts": ...
+    def from_bytes(data: Buffer) -> "FitCounts": ...
     def __eq__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
 

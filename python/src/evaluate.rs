@@ -32,7 +32,7 @@ pub fn loaded(
             format!("{name}.{part}")
         }
     };
-    let x = arrays::logits(logits, &what("logits"), true)?;
+    let x = arrays::logits(logits, &what("logits"))?;
     let (n, k) = (x.rows, x.cols);
     if k != classes.len() {
         return Err(value_error(format!(
@@ -46,13 +46,13 @@ pub fn loaded(
         return Err(value_error(format!("{}: holds no rows", what("logits"))));
     }
     let mut values = Vec::with_capacity(n * k);
-    match x.rows() {
+    match x.rows()? {
         Rows::F32(s) => values.extend(s.iter().map(|&v| f64::from(v))),
         Rows::F64(s) => values.extend_from_slice(s),
     }
     check_finite(&values, k, classes, &what("logits"))?;
     let os = arrays::objectness(objectness, &what("objectness"), n)?;
-    let col = os.column();
+    let col = os.column()?;
     let labels = match labels {
         Some(l) if !l.is_none() => Some(arrays::labels(l, &what("labels"), n, k)?),
         _ => None,
@@ -128,7 +128,9 @@ pub fn data_set(classes: &[String], obj: &Bound<'_, PyAny>, name: &str) -> PyRes
 /// the table's class names in order.
 #[pyfunction]
 #[pyo3(signature = (table, logits, labels, objectness=None, *, val=None, ood=None,
-                    ece_bins=10, ece_binning="design", classes=None))]
+                    ece_bins=arrays::Count::new(10), ece_binning="design", classes=None),
+    text_signature = "(table, logits, labels, objectness=None, *, val=None, ood=None, \
+                      ece_bins=10, ece_binning='design', classes=None)")]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate<'py>(
     py: Python<'py>,
@@ -138,19 +140,15 @@ pub fn evaluate<'py>(
     objectness: Option<&Bound<'py, PyAny>>,
     val: Option<&Bound<'py, PyAny>>,
     ood: Option<&Bound<'py, PyAny>>,
-    ece_bins: usize,
+    ece_bins: arrays::Count,
     ece_binning: &str,
     classes: Option<Vec<String>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let t = &table.get().table;
     let names: Vec<String> = t.class_names().map(str::to_string).collect();
     let data_classes = classes.unwrap_or_else(|| names.clone());
-    if ece_bins == 0 || ece_bins > metrics::MAX_BINS {
-        return Err(value_error(format!(
-            "ece_bins must be in 1..={}",
-            metrics::MAX_BINS
-        )));
-    }
+    let expected = format!("an integer from 1 to {}", metrics::MAX_BINS);
+    let ece_bins = ece_bins.get("ece_bins", 1..=metrics::MAX_BINS, &expected)?;
     let binning = Binning::from_name(ece_binning).map_err(|e| value_error(e.to_string()))?;
     let test = loaded(&data_classes, logits, Some(labels), objectness, "")?;
     let val = val

@@ -24,10 +24,10 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyType};
 use rayon::prelude::*;
 
-use crate::arrays::{self, value_error};
+use crate::arrays::{self, value_error, Count};
 use crate::errors::host_error;
 use crate::evaluate;
-use crate::source::{self, ArraySource, BlockSink};
+use crate::source::{ArraySource, BlockSink};
 use crate::table::PyTable;
 
 /// Rows per range of a parallel pass: below it, one range.
@@ -55,9 +55,9 @@ pub fn fit_error(e: &FitError) -> PyErr {
 /// `None` (no Bayes head), or a dict with `bins` and/or `lambda`.
 #[allow(clippy::too_many_arguments)]
 fn params(
-    bins_ml: usize,
+    bins_ml: Count,
     lambda_ml: Option<f64>,
-    bins_map: usize,
+    bins_map: Count,
     lambda_map: Option<f64>,
     edges: &str,
     tail: &str,
@@ -65,9 +65,9 @@ fn params(
 ) -> PyResult<FitParams> {
     let d = FitParams::default();
     let p = FitParams {
-        bins_ml,
+        bins_ml: bins(&bins_ml, "bins_ml")?,
         lambda_ml: lambda_ml.map_or(d.lambda_ml, |v| v as f32),
-        bins_map,
+        bins_map: bins(&bins_map, "bins_map")?,
         lambda_map: lambda_map.map_or(d.lambda_map, |v| v as f32),
         edges: EdgeMode::from_name(edges).map_err(|e| value_error(e.to_string()))?,
         upper_tail: UpperTail::from_name(tail).map_err(|e| value_error(e.to_string()))?,
@@ -76,6 +76,18 @@ fn params(
     p.validate().map_err(|e| fit_error(&e))?;
     Ok(p)
 }
+
+/// A bin count: `1..=65535`, else the message of a fit parameter out of range.
+fn bins(count: &Count, name: &str) -> PyResult<usize> {
+    count.get(name, 1..=MAX_BINS, "an integer from 1 to 65535")
+}
+
+/// The largest bin count of a histogram (the table stores it as `u16`).
+const MAX_BINS: usize = u16::MAX as usize;
+
+/// The most lambdas per decade `tune` takes: far more than a search needs, and few
+/// enough that the grid is always small next to the data.
+const MAX_LAMBDAS_PER_DECADE: usize = 1000;
 
 /// The `bayes` keyword: `True` (the default head), `False` or `None` (no Bayes head),
 /// or a dict with `bins` and/or `lambda`.
@@ -108,7 +120,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BayesArg {
         let mut p = BayesParams::default();
         for (key, value) in d.iter() {
             match key.extract::<String>()?.as_str() {
-                "bins" => p.bins = value.extract()?,
+                "bins" => p.bins = bins(&value.extract::<Count>()?, "bins_bayes")?,
                 "lambda" => p.lambda = value.extract::<f64>()? as f32,
                 other => {
                     return Err(value_error(format!(
@@ -124,7 +136,15 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BayesArg {
 /// Class names: the given ones (checked as a data file's header is), or `class0` ..
 /// `class{K-1}` as for an NPY directory without `classes.txt`.
 fn class_names(classes: Option<Vec<String>>, k: usize) -> PyResult<Vec<String>> {
-    let names = classes.unwrap_or_else(|| (0..k).map(|i| format!("class{i}")).collect());
+    let names = match classes {
+        Some(names) => names,
+        // More columns than a table holds: refused before any name is made.
+        None if k > usize::from(u16::MAX) => {
+            let e = DataError::new("classes", DataErrorKind::ClassCount { found: k });
+            return Err(value_error(e.to_string()));
+        }
+        None => (0..k).map(|i| format!("class{i}")).collect(),
+    };
     if names.len() != k {
         return Err(value_error(format!(
             "classes: {} names given but the logits have {k} columns",
@@ -152,7 +172,7 @@ fn check_class_names(names: &[String]) -> PyResult<()> {
 struct Held<'py> {
     classes: Vec<String>,
     logits: arrays::Logits<'py>,
-    labels: source::Labels<'py>,
+    labels: arrays::Labels<'py>,
     objectness: arrays::Objectness<'py>,
 }
 
@@ -163,9 +183,9 @@ impl<'py> Held<'py> {
         objectness: Option<&Bound<'py, PyAny>>,
         classes: Option<Vec<String>>,
     ) -> PyResult<Self> {
-        let x = arrays::logits(logits, "logits", true)?;
+        let x = arrays::logits(logits, "logits")?;
         let classes = class_names(classes, x.cols)?;
-        let labels = source::labels(labels, "labels", x.rows, x.cols)?;
+        let labels = arrays::label_array(labels, "labels", x.rows)?;
         let objectness = arrays::objectness(objectness, "objectness", x.rows)?;
         Ok(Self {
             classes,
@@ -175,7 +195,7 @@ impl<'py> Held<'py> {
         })
     }
 
-    fn source(&self) -> ArraySource<'_> {
+    fn source(&self) -> PyResult<ArraySource<'_>> {
         ArraySource::new(
             &self.classes,
             &self.logits,
@@ -316,9 +336,12 @@ fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
 /// columns (default `class0` ..). `bayes=True` fits the Bayes head with its defaults,
 /// `bayes={"bins": 22, "lambda": 1e-3}` with others, `None` or `False` leaves it out.
 #[pyfunction]
-#[pyo3(signature = (logits, labels, objectness=None, *, classes=None, bins_ml=22,
-                    lambda_ml=None, bins_map=17, lambda_map=None, edges="linspace",
-                    tail="zero", bayes=BayesArg::DEFAULT))]
+#[pyo3(signature = (logits, labels, objectness=None, *, classes=None, bins_ml=Count::new(22),
+                    lambda_ml=None, bins_map=Count::new(17), lambda_map=None, edges="linspace",
+                    tail="zero", bayes=BayesArg::DEFAULT),
+    text_signature = "(logits, labels, objectness=None, *, classes=None, bins_ml=22, \
+                      lambda_ml=None, bins_map=17, lambda_map=None, edges='linspace', \
+                      tail='zero', bayes=True)")]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
     py: Python<'py>,
@@ -326,9 +349,9 @@ pub fn fit<'py>(
     labels: &Bound<'py, PyAny>,
     objectness: Option<&Bound<'py, PyAny>>,
     classes: Option<Vec<String>>,
-    bins_ml: usize,
+    bins_ml: Count,
     lambda_ml: Option<f64>,
-    bins_map: usize,
+    bins_map: Count,
     lambda_map: Option<f64>,
     edges: &str,
     tail: &str,
@@ -336,7 +359,7 @@ pub fn fit<'py>(
 ) -> PyResult<PyTable> {
     let p = params(bins_ml, lambda_ml, bins_map, lambda_map, edges, tail, bayes)?;
     let held = Held::new(logits, labels, objectness, classes)?;
-    let src = held.source();
+    let src = held.source()?;
     let table = py.detach(|| -> PyResult<DynTable> {
         let stats = stats_of(&src).map_err(|e| fit_error(&e))?;
         let edges = stats.edges(&p).map_err(|e| fit_error(&e))?;
@@ -379,10 +402,11 @@ macro_rules! mergeable {
                 PyBytes::new(py, &self.inner.to_bytes())
             }
 
-            /// Reads [`to_bytes`]'s output; a corrupt, truncated or newer input raises
+            /// Reads `to_bytes`'s output; a corrupt, truncated or newer input raises
             /// `ValueError`.
             #[staticmethod]
-            fn from_bytes(data: pyo3::pybacked::PyBackedBytes) -> PyResult<Self> {
+            fn from_bytes(data: &Bound<'_, PyAny>) -> PyResult<Self> {
+                let data = arrays::buffer_bytes(data, "data")?;
                 let inner = <$inner>::from_bytes(&data).map_err(|e| fit_error(&e))?;
                 Ok(Self { inner })
             }
@@ -437,7 +461,7 @@ impl PyFitStats {
         classes: Option<Vec<String>>,
     ) -> PyResult<Self> {
         let held = Held::new(logits, labels, objectness, classes)?;
-        let src = held.source();
+        let src = held.source()?;
         let inner = py.detach(|| stats_of(&src)).map_err(|e| fit_error(&e))?;
         Ok(Self { inner })
     }
@@ -472,14 +496,16 @@ impl PyFitStats {
 
     /// The edges of every histogram for a fit with these settings (the keywords of
     /// `mlmap.fit`): what pass (b) counts against.
-    #[pyo3(signature = (*, bins_ml=22, lambda_ml=None, bins_map=17, lambda_map=None,
-                        edges="linspace", tail="zero", bayes=BayesArg::DEFAULT))]
+    #[pyo3(signature = (*, bins_ml=Count::new(22), lambda_ml=None, bins_map=Count::new(17),
+                        lambda_map=None, edges="linspace", tail="zero", bayes=BayesArg::DEFAULT),
+        text_signature = "($self, *, bins_ml=22, lambda_ml=None, bins_map=17, \
+                          lambda_map=None, edges='linspace', tail='zero', bayes=True)")]
     #[allow(clippy::too_many_arguments)]
     fn edges(
         &self,
-        bins_ml: usize,
+        bins_ml: Count,
         lambda_ml: Option<f64>,
-        bins_map: usize,
+        bins_map: Count,
         lambda_map: Option<f64>,
         edges: &str,
         tail: &str,
@@ -527,7 +553,8 @@ impl PyFitEdges {
 
     /// Reads `to_bytes`'s output.
     #[staticmethod]
-    fn from_bytes(data: pyo3::pybacked::PyBackedBytes) -> PyResult<Self> {
+    fn from_bytes(data: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let data = arrays::buffer_bytes(data, "data")?;
         let inner = FitEdges::from_bytes(&data).map_err(|e| fit_error(&e))?;
         Ok(Self { inner })
     }
@@ -569,7 +596,7 @@ impl PyFitCounts {
     ) -> PyResult<Self> {
         let edges = &edges.get().inner;
         let held = Held::new(logits, labels, objectness, Some(edges.classes().to_vec()))?;
-        let src = held.source();
+        let src = held.source()?;
         let inner = py.detach(|| counts_of(&src, edges))?;
         Ok(Self { inner })
     }
@@ -611,9 +638,16 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
 #[pyfunction]
 #[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, classes=None,
                     objective="ece", bins_ml=None, bins_map=None, bins_bayes=None,
-                    bayes=true, lambda_min=1e-8, lambda_max=1e-1, lambdas_per_decade=3,
+                    bayes=true, lambda_min=1e-8, lambda_max=1e-1,
+                    lambdas_per_decade=Count::new(3),
                     lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
-                    max_map_loss=0.01, edges="linspace", tail="zero", top=5))]
+                    max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5)),
+    text_signature = "(logits, labels, val, objectness=None, *, ood=None, classes=None, \
+                      objective='ece', bins_ml=None, bins_map=None, bins_bayes=None, \
+                      bayes=True, lambda_min=1e-8, lambda_max=1e-1, lambdas_per_decade=3, \
+                      lambda_bayes_min=None, lambda_bayes_max=None, \
+                      max_accuracy_loss=0.005, max_map_loss=0.01, edges='linspace', \
+                      tail='zero', top=5)")]
 #[allow(clippy::too_many_arguments)]
 pub fn tune<'py>(
     py: Python<'py>,
@@ -624,30 +658,47 @@ pub fn tune<'py>(
     ood: Option<&Bound<'py, PyAny>>,
     classes: Option<Vec<String>>,
     objective: &str,
-    bins_ml: Option<Vec<usize>>,
-    bins_map: Option<Vec<usize>>,
-    bins_bayes: Option<Vec<usize>>,
+    bins_ml: Option<Vec<Count>>,
+    bins_map: Option<Vec<Count>>,
+    bins_bayes: Option<Vec<Count>>,
     bayes: bool,
     lambda_min: f64,
     lambda_max: f64,
-    lambdas_per_decade: usize,
+    lambdas_per_decade: Count,
     lambda_bayes_min: Option<f64>,
     lambda_bayes_max: Option<f64>,
     max_accuracy_loss: f64,
     max_map_loss: f64,
     edges: &str,
     tail: &str,
-    top: usize,
+    top: Count,
 ) -> PyResult<(PyTable, Bound<'py, PyDict>)> {
-    let grid = |b: Option<Vec<usize>>, what: &str| -> PyResult<Vec<usize>> {
-        let b = b.unwrap_or_else(|| (4..=40).collect());
-        if b.is_empty() || b.iter().any(|&n| n == 0 || n > usize::from(u16::MAX)) {
-            return Err(value_error(format!(
-                "{what}: bin counts must be in 1..=65535, at least one"
-            )));
+    let grid = |b: Option<Vec<Count>>, what: &str| -> PyResult<Vec<usize>> {
+        let Some(b) = b else {
+            return Ok((4..=40).collect());
+        };
+        let refuse = |got: &str| {
+            value_error(format!(
+                "{what}: bin counts must be in 1..=65535, at least one{got}"
+            ))
+        };
+        if b.is_empty() {
+            return Err(refuse(""));
         }
-        Ok(b)
+        b.iter()
+            .map(|n| {
+                n.value()
+                    .filter(|v| (1..=MAX_BINS).contains(v))
+                    .ok_or_else(|| refuse(&format!(" (got {})", n.text())))
+            })
+            .collect()
     };
+    let lambdas_per_decade = lambdas_per_decade.get(
+        "lambdas_per_decade",
+        1..=MAX_LAMBDAS_PER_DECADE,
+        "an integer from 1 to 1000",
+    )?;
+    let top = top.get("top", 0..=usize::MAX, "an integer >= 0")?;
     let lambdas = host_tune::lambda_grid(lambda_min, lambda_max, lambdas_per_decade)
         .map_err(|e| value_error(format!("lambda_min/lambda_max: {e}")))?;
     let bayes_grid = if bayes {
@@ -688,7 +739,7 @@ pub fn tune<'py>(
         detail: top,
     };
     let held = Held::new(logits, labels, objectness, classes)?;
-    let src = held.source();
+    let src = held.source()?;
     let names = held.classes.clone();
     let val = evaluate::data_set(&names, val, "val")?;
     let ood = ood

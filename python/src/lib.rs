@@ -3,7 +3,7 @@
 //! fit statistics, all on the library `mlmap` (feature `std`).
 //!
 //! Nothing here may panic on input: every array is checked at the boundary
-//! ([`arrays`]) and every failure is a Python exception ([`errors`]).
+//! (`arrays`) and every failure is a Python exception (`errors`).
 
 #![deny(
     clippy::unwrap_used,
@@ -27,38 +27,61 @@ use crate::arrays::{value_error, Rows};
 
 /// The decided class of every row (DESIGN §1.7): the largest score, an exact tie
 /// going to the larger logit, then to the lower index. `scores` and `logits` are
-/// `(N, K)` float arrays; returns `(N,)` int64 class indices.
+/// `(N, K)` float arrays of any order, stride or alignment, K at least 1; returns
+/// `(N,)` int64 class indices. A NaN score or logit is a `ValueError`: a NaN is not
+/// comparable, so no class could be said to win (DESIGN §6.20).
 #[pyfunction]
 fn decide<'py>(
     py: Python<'py>,
     scores: &Bound<'py, PyAny>,
     logits: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-    let s = arrays::logits(scores, "scores", true)?;
-    let x = arrays::logits(logits, "logits", true)?;
+    let s = arrays::logits(scores, "scores")?;
+    let x = arrays::logits(logits, "logits")?;
     if (s.rows, s.cols) != (x.rows, x.cols) {
         return Err(value_error(format!(
             "scores have shape ({}, {}) but logits ({}, {})",
             s.rows, s.cols, x.rows, x.cols
         )));
     }
-    let k = s.cols.max(1);
-    fn pick<S, L>(s: &[S], x: &[L], k: usize) -> Vec<i64>
+    let k = s.cols;
+    if k == 0 {
+        return Err(value_error(format!(
+            "scores: shape ({}, 0) has no class to decide between",
+            s.rows
+        )));
+    }
+    fn nan_at<T: Copy + PartialOrd>(values: &[T], k: usize, what: &str) -> PyResult<()> {
+        // `v != v` only for NaN.
+        #[allow(clippy::eq_op)]
+        match values.iter().position(|&v| v != v) {
+            None => Ok(()),
+            Some(p) => Err(value_error(format!(
+                "{what}: row index {}: the value of class {} is NaN; a decision needs \
+                 comparable values",
+                p / k,
+                p % k
+            ))),
+        }
+    }
+    fn pick<S, L>(s: &[S], x: &[L], k: usize) -> PyResult<Vec<i64>>
     where
         S: Copy + PartialOrd,
         L: Copy + PartialOrd,
     {
-        s.chunks_exact(k)
+        nan_at(s, k, "scores")?;
+        nan_at(x, k, "logits")?;
+        Ok(s.chunks_exact(k)
             .zip(x.chunks_exact(k))
             .map(|(s, x)| mlmap::decide(s, x) as i64)
-            .collect()
+            .collect())
     }
-    let out = match (s.rows(), x.rows()) {
+    let out = match (s.rows()?, x.rows()?) {
         (Rows::F32(s), Rows::F32(x)) => pick(s, x, k),
         (Rows::F32(s), Rows::F64(x)) => pick(s, x, k),
         (Rows::F64(s), Rows::F32(x)) => pick(s, x, k),
         (Rows::F64(s), Rows::F64(x)) => pick(s, x, k),
-    };
+    }?;
     Ok(PyArray1::from_vec(py, out))
 }
 

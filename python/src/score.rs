@@ -23,7 +23,8 @@ pub struct RowError {
     pub error: InferError,
 }
 
-/// Scores rows `first..` of `logits` (as many as `out` holds) into `out`.
+/// Scores the rows of `logits` (exactly as many as `out` holds, rows `first..` of the
+/// whole arrays) into `out`.
 fn score_chunk(
     table: &DynTable,
     head: Head,
@@ -37,21 +38,27 @@ fn score_chunk(
     let cats = table.bayes().map_or(k, |b| b.categories().max(k));
     let mut scratch = vec![0f32; cats];
     let mut x = vec![0f32; k];
-    for (i, s) in out.chunks_exact_mut(k).enumerate() {
+    let mut one = |i: usize, xs: &[f32], s: &mut [f32]| {
         let row = first + i;
-        let xs: &[f32] = match logits {
-            Rows::F32(all) => all.get(row * k..(row + 1) * k).unwrap_or(&[]),
-            Rows::F64(all) => {
-                let src = all.get(row * k..(row + 1) * k).unwrap_or(&[]);
+        let os = objectness.get_f32(row);
+        view.score_into(head, xs, os, s, &mut scratch)
+            .map_err(|error| RowError { row, error })
+    };
+    let rows = out.chunks_exact_mut(k);
+    match logits {
+        Rows::F32(all) => {
+            for (i, (s, xs)) in rows.zip(all.chunks_exact(k)).enumerate() {
+                one(i, xs, s)?;
+            }
+        }
+        Rows::F64(all) => {
+            for (i, (s, src)) in rows.zip(all.chunks_exact(k)).enumerate() {
                 for (d, &v) in x.iter_mut().zip(src) {
                     *d = v as f32;
                 }
-                &x
+                one(i, &x, s)?;
             }
-        };
-        let os = objectness.get_f32(row);
-        view.score_into(head, xs, os, s, &mut scratch)
-            .map_err(|error| RowError { row, error })?;
+        }
     }
     Ok(())
 }
@@ -78,15 +85,25 @@ pub fn score(
             error: InferError::NoBayesHead,
         });
     }
-    let mut out = vec![0f32; n * k];
+    // One logit and one objectness per row and class, or nothing is scored.
+    let values = n.checked_mul(k).filter(|&v| k > 0 && v == logits.len());
+    let Some(values) = values.filter(|_| objectness.covers(n)) else {
+        return Err(RowError {
+            row: 0,
+            error: InferError::Length,
+        });
+    };
+    let mut out = vec![0f32; values];
     if n < PARALLEL_MIN_ROWS || rayon::current_num_threads() < 2 {
         score_chunk(table, head, logits, objectness, k, 0, &mut out)?;
         return Ok(out);
     }
+    let pieces = logits.pieces(CHUNK_ROWS * k);
     let results: Vec<Result<(), RowError>> = out
         .par_chunks_mut(CHUNK_ROWS * k)
+        .zip(pieces)
         .enumerate()
-        .map(|(c, chunk)| score_chunk(table, head, logits, objectness, k, c * CHUNK_ROWS, chunk))
+        .map(|(c, (chunk, x))| score_chunk(table, head, x, objectness, k, c * CHUNK_ROWS, chunk))
         .collect();
     // Chunks are in row order, and each stops at its first error.
     results.into_iter().collect::<Result<(), RowError>>()?;

@@ -7,100 +7,9 @@ use std::path::{Path, PathBuf};
 
 use mlmap::host::dataset::{DataError, DataErrorKind, Label, Location, Row, RowSource};
 use mlmap::host::fit::{FitLabel, FitLogit};
-use numpy::prelude::*;
-use numpy::{PyArray1, PyReadonlyArray1, PyUntypedArray};
 use pyo3::prelude::*;
 
-use crate::arrays::{self, value_error, Column, Logits, Objectness, Rows};
-
-/// Labels borrowed from an integer array of any width (or copied when strided).
-#[derive(Debug, Clone, Copy)]
-pub enum LabelColumn<'a> {
-    I64(&'a [i64]),
-    I32(&'a [i32]),
-    I16(&'a [i16]),
-    I8(&'a [i8]),
-    U64(&'a [u64]),
-    U32(&'a [u32]),
-    U16(&'a [u16]),
-    U8(&'a [u8]),
-}
-
-impl LabelColumn<'_> {
-    /// Label `i`, exactly (`None` past the end).
-    #[inline]
-    fn get(&self, i: usize) -> Option<i128> {
-        match self {
-            Self::I64(s) => s.get(i).map(|&v| i128::from(v)),
-            Self::I32(s) => s.get(i).map(|&v| i128::from(v)),
-            Self::I16(s) => s.get(i).map(|&v| i128::from(v)),
-            Self::I8(s) => s.get(i).map(|&v| i128::from(v)),
-            Self::U64(s) => s.get(i).map(|&v| i128::from(v)),
-            Self::U32(s) => s.get(i).map(|&v| i128::from(v)),
-            Self::U16(s) => s.get(i).map(|&v| i128::from(v)),
-            Self::U8(s) => s.get(i).map(|&v| i128::from(v)),
-        }
-    }
-}
-
-/// A label array held for the duration of a call.
-pub enum Labels<'py> {
-    I64(PyReadonlyArray1<'py, i64>),
-    I32(PyReadonlyArray1<'py, i32>),
-    I16(PyReadonlyArray1<'py, i16>),
-    I8(PyReadonlyArray1<'py, i8>),
-    U64(PyReadonlyArray1<'py, u64>),
-    U32(PyReadonlyArray1<'py, u32>),
-    U16(PyReadonlyArray1<'py, u16>),
-    U8(PyReadonlyArray1<'py, u8>),
-    /// A checked copy (a strided or byte-swapped array).
-    Owned(Vec<i64>),
-}
-
-impl Labels<'_> {
-    /// The labels as a column.
-    pub fn column(&self) -> LabelColumn<'_> {
-        match self {
-            Self::I64(a) => LabelColumn::I64(a.as_slice().unwrap_or(&[])),
-            Self::I32(a) => LabelColumn::I32(a.as_slice().unwrap_or(&[])),
-            Self::I16(a) => LabelColumn::I16(a.as_slice().unwrap_or(&[])),
-            Self::I8(a) => LabelColumn::I8(a.as_slice().unwrap_or(&[])),
-            Self::U64(a) => LabelColumn::U64(a.as_slice().unwrap_or(&[])),
-            Self::U32(a) => LabelColumn::U32(a.as_slice().unwrap_or(&[])),
-            Self::U16(a) => LabelColumn::U16(a.as_slice().unwrap_or(&[])),
-            Self::U8(a) => LabelColumn::U8(a.as_slice().unwrap_or(&[])),
-            Self::Owned(v) => LabelColumn::I64(v),
-        }
-    }
-}
-
-/// Borrows an `(N,)` integer label array in place when it is contiguous and of a native
-/// integer type; otherwise copies it (checked).
-pub fn labels<'py>(
-    obj: &Bound<'py, PyAny>,
-    what: &str,
-    n: usize,
-    k: usize,
-) -> PyResult<Labels<'py>> {
-    if let Ok(a) = obj.cast::<PyUntypedArray>() {
-        if a.ndim() == 1 && a.is_c_contiguous() && a.shape().first() == Some(&n) {
-            macro_rules! borrow {
-                ($($t:ty => $v:ident),*) => {$(
-                    if let Ok(x) = a.cast::<PyArray1<$t>>() {
-                        let x = x.try_readonly().map_err(|e| {
-                            value_error(format!("{what}: cannot be read: {e}"))
-                        })?;
-                        return Ok(Labels::$v(x));
-                    }
-                )*};
-            }
-            borrow!(i64 => I64, i32 => I32, i16 => I16, i8 => I8,
-                    u64 => U64, u32 => U32, u16 => U16, u8 => U8);
-        }
-    }
-    // Any other layout or type: the checked conversion of `arrays::labels`.
-    Ok(Labels::Owned(arrays::labels(obj, what, n, k)?))
-}
+use crate::arrays::{Column, LabelColumn, Labels, Logits, Objectness, Rows};
 
 /// Rows of numpy arrays: the logits, optionally labels and objectness, restricted to a
 /// range of rows. Errors name the arrays by `prefix` (`logits`, `labels`,
@@ -118,14 +27,14 @@ pub struct ArraySource<'a> {
 }
 
 impl<'a> ArraySource<'a> {
-    /// Every row of the arrays.
+    /// Every row of the arrays, each holding exactly one value per row (and class).
     pub fn new(
         classes: &'a [String],
         logits: &'a Logits<'_>,
         labels: Option<&'a Labels<'_>>,
         objectness: &'a Objectness<'_>,
         prefix: &str,
-    ) -> Self {
+    ) -> PyResult<Self> {
         let name = |part: &str| {
             PathBuf::from(if prefix.is_empty() {
                 part.to_string()
@@ -133,16 +42,39 @@ impl<'a> ArraySource<'a> {
                 format!("{prefix}.{part}")
             })
         };
-        Self {
+        let n = logits.rows;
+        let labels_path = name("labels");
+        let what = labels_path.display().to_string();
+        let rows = logits.rows()?;
+        let objectness = objectness.column()?;
+        if classes.len() != logits.cols || !objectness.covers(n) {
+            return Err(crate::arrays::value_error(format!(
+                "{}: the arrays do not have one value per row and class",
+                name("logits").display()
+            )));
+        }
+        Ok(Self {
             path: name("logits"),
-            labels_path: name("labels"),
+            labels: labels.map(|l| l.column(n, &what)).transpose()?,
+            labels_path,
             objectness_path: name("objectness"),
             classes,
-            logits: logits.rows(),
-            labels: labels.map(Labels::column),
-            objectness: objectness.column(),
-            range: 0..logits.rows,
-        }
+            logits: rows,
+            objectness,
+            range: 0..n,
+        })
+    }
+
+    /// The error of values missing from the arrays: never, as [`ArraySource::new`]
+    /// checked their lengths, but reported rather than read as empty.
+    fn missing(&self, first: usize) -> DataError {
+        DataError::new(
+            &self.path,
+            DataErrorKind::Io {
+                reason: "the arrays hold fewer values than their shapes".to_string(),
+            },
+        )
+        .at(Location::Row(first as u64))
     }
 
     /// Number of rows.
@@ -210,29 +142,27 @@ impl ArraySource<'_> {
         while start < self.range.end {
             let end = self.range.end.min(start + BLOCK_ROWS);
             let values = start * k..end * k;
-            let finite = match self.logits {
-                Rows::F32(all) => all
-                    .get(values)
-                    .is_some_and(|x| x.iter().fold(true, |ok, v| ok & v.is_finite())),
-                Rows::F64(all) => all
-                    .get(values)
-                    .is_some_and(|x| x.iter().fold(true, |ok, v| ok & v.is_finite())),
+            let finite = match self.logits.get(values.clone()) {
+                Some(Rows::F32(x)) => x.iter().fold(true, |ok, v| ok & v.is_finite()),
+                Some(Rows::F64(x)) => x.iter().fold(true, |ok, v| ok & v.is_finite()),
+                None => return Err(self.missing(start).into()),
             };
             if !finite {
                 return Err(self.first_error(start..end).into());
             }
+            let Some(x) = self.logits.get(values) else {
+                return Err(self.missing(start).into());
+            };
             macro_rules! dispatch {
                 ($($v:ident),*) => {
                     match labels {
                         $(LabelColumn::$v(l) => {
-                            let l = l.get(start..end).unwrap_or(&[]);
-                            match self.logits {
-                                Rows::F32(x) => {
-                                    sink.block(self, start, x.get(start * k..end * k).unwrap_or(&[]), l)
-                                }
-                                Rows::F64(x) => {
-                                    sink.block(self, start, x.get(start * k..end * k).unwrap_or(&[]), l)
-                                }
+                            let Some(l) = l.get(start..end) else {
+                                return Err(self.missing(start).into());
+                            };
+                            match x {
+                                Rows::F32(x) => sink.block(self, start, x, l),
+                                Rows::F64(x) => sink.block(self, start, x, l),
                             }
                         })*
                     }
@@ -283,17 +213,18 @@ impl RowSource for ArraySource<'_> {
         let mut x = vec![0f64; k];
         let classes = i128::try_from(k).unwrap_or(i128::MAX);
         for i in self.range.clone() {
-            match self.logits {
-                Rows::F32(all) => {
-                    let src = all.get(i * k..(i + 1) * k).unwrap_or(&[]);
+            match self.logits.get(i * k..(i + 1) * k) {
+                Some(Rows::F32(src)) => {
                     for (d, &v) in x.iter_mut().zip(src) {
                         *d = f64::from(v);
                     }
                 }
-                Rows::F64(all) => {
-                    let src = all.get(i * k..(i + 1) * k).unwrap_or(&[]);
-                    x.copy_from_slice(src);
+                Some(Rows::F64(src)) => {
+                    for (d, &v) in x.iter_mut().zip(src) {
+                        *d = v;
+                    }
                 }
+                None => return Err(self.missing(i).into()),
             }
             if let Some(c) = x.iter().position(|v| !v.is_finite()) {
                 let text = format!("{}", x.get(c).copied().unwrap_or(f64::NAN));

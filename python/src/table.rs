@@ -6,12 +6,11 @@ use std::hash::{Hash, Hasher};
 use std::path::PathBuf;
 
 use mlmap::host::names::Named;
-use mlmap::host::DynTable;
-use mlmap::{Head, InferError};
+use mlmap::host::{DynQTable, DynTable};
+use mlmap::{Head, InferError, QTableError};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
-use pyo3::pybacked::PyBackedBytes;
-use pyo3::types::{PyBytes, PyTuple};
+use pyo3::types::{PyBytes, PyDict, PyTuple};
 
 use crate::arrays::{self, value_error};
 use crate::errors::{io_error, table_error};
@@ -26,11 +25,19 @@ use crate::score::{self, RowError};
 ///
 /// Scoring (`ml`, `map`, `bayes`, `scores`) runs the device's `f32` code on every row,
 /// so the scores are bit for bit those of the firmware and of `mlmap apply`.
+///
+/// A file with a quantized section (DESIGN §6.19, `mlmap quantize`) keeps it: the
+/// section is checked (its CRC and the table it names), described by `quantized`, and
+/// written back unchanged by `to_bytes`, `save` and pickling.
 #[pyclass(module = "mlmap", frozen, name = "Table")]
 pub struct PyTable {
     pub(crate) table: DynTable,
-    /// The canonical encoding (DESIGN §6.10): equal tables have equal bytes.
+    /// The file's bytes: the canonical encoding (DESIGN §6.10; equal tables have equal
+    /// bytes), then the quantized section the table was read with, if any.
     pub(crate) bytes: Vec<u8>,
+    /// The quantized section's code width, length in bytes, and whether it holds the
+    /// Bayes head.
+    quantized: Option<(u8, usize, bool)>,
 }
 
 impl PyTable {
@@ -39,7 +46,28 @@ impl PyTable {
         let bytes = table
             .to_vec()
             .map_err(|e| table_error(format!("cannot encode the table: {e}")))?;
-        Ok(Self { table, bytes })
+        Ok(Self {
+            table,
+            bytes,
+            quantized: None,
+        })
+    }
+
+    /// Decodes the bytes of a table file, keeping a valid quantized section and
+    /// refusing an invalid one; `context` prefixes the messages (a file's path).
+    fn decode(bytes: &[u8], context: &str) -> PyResult<Self> {
+        let error = |msg: String| table_error(format!("{context}{msg}"));
+        let table = DynTable::from_bytes(bytes).map_err(|e| error(e.to_string()))?;
+        let mut t = Self::new(table)?;
+        match DynQTable::from_bytes(bytes) {
+            Ok(q) => {
+                t.quantized = Some((q.bits(), q.section_len(), q.has_bayes()));
+                t.bytes = bytes.to_vec();
+            }
+            Err(QTableError::NotQuantized) => {}
+            Err(e) => return Err(error(format!("quantized section: {e}"))),
+        }
+        Ok(t)
     }
 
     fn head_names(&self) -> Vec<&'static str> {
@@ -58,7 +86,7 @@ impl PyTable {
         logits: &Bound<'py, PyAny>,
         objectness: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let x = arrays::logits(logits, "logits", false)?;
+        let x = arrays::logits(logits, "logits")?;
         let k = self.table.k();
         if x.cols != k {
             return Err(value_error(format!(
@@ -69,7 +97,7 @@ impl PyTable {
         }
         let n = x.rows;
         let os = arrays::objectness(objectness, "objectness", n)?;
-        let (rows, col, table) = (x.rows(), os.column(), &self.table);
+        let (rows, col, table) = (x.rows()?, os.column()?, &self.table);
         let scored = py.detach(|| score::score(table, head, rows, col, n));
         let out = scored.map_err(|RowError { row, error }| match error {
             InferError::NoBayesHead => value_error(error.to_string()),
@@ -90,32 +118,36 @@ pub fn parse_head(name: &str) -> PyResult<Head> {
 
 #[pymethods]
 impl PyTable {
-    /// Decodes a table from the bytes of a `.mlmap` file.
+    /// Decodes a table from the bytes of a `.mlmap` file: `bytes`, `bytearray`, a
+    /// `memoryview` or any C-contiguous buffer of single bytes (a numpy `uint8` array).
+    /// A quantized section after the table is checked and kept.
     ///
     /// Raises `mlmap.TableError` (a `ValueError`) with the layer's message when the
-    /// bytes are not a valid table.
+    /// bytes are not a valid table (or carry an invalid quantized section), and
+    /// `TypeError` for an object that is not such a buffer.
     #[staticmethod]
-    fn from_bytes(data: PyBackedBytes) -> PyResult<Self> {
-        let table = DynTable::from_bytes(&data).map_err(|e| table_error(e.to_string()))?;
-        Self::new(table)
+    fn from_bytes(data: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let bytes = arrays::buffer_bytes(data, "data")?;
+        Self::decode(&bytes, "")
     }
 
-    /// The table's bytes (the `.mlmap` file format, docs/FORMAT.md).
+    /// The file's bytes (the `.mlmap` file format, docs/FORMAT.md): the table, then
+    /// its quantized section when it was read with one.
     fn to_bytes<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
         PyBytes::new(py, &self.bytes)
     }
 
-    /// Reads and validates a `.mlmap` file; errors name the file, as `mlmap` does.
+    /// Reads and validates a `.mlmap` file (keeping a quantized section); errors name
+    /// the file, as `mlmap` does.
     #[staticmethod]
     fn load(path: PathBuf) -> PyResult<Self> {
         let bytes = std::fs::read(&path).map_err(|e| io_error(&path, &e))?;
-        let table = DynTable::from_bytes(&bytes)
-            .map_err(|e| table_error(format!("{}: {e}", path.display())))?;
-        Self::new(table)
+        Self::decode(&bytes, &format!("{}: ", path.display()))
     }
 
-    /// Writes the table to `path` (through a temporary file renamed into place, so a
-    /// failed write never leaves a half-written table).
+    /// Writes the table to `path`, with its quantized section if it has one (through
+    /// a temporary file renamed into place, so a failed write never leaves a
+    /// half-written table).
     fn save(&self, path: PathBuf) -> PyResult<()> {
         crate::errors::write_atomic(&path, &self.bytes)
     }
@@ -214,10 +246,30 @@ impl PyTable {
             .collect()
     }
 
-    /// Size of the encoded table in bytes.
+    /// Size of the file in bytes (`len(to_bytes())`): the encoded table, and its
+    /// quantized section if it has one.
     #[getter]
     fn size(&self) -> usize {
         self.bytes.len()
+    }
+
+    /// The quantized section the table was read with (DESIGN §6.19): `None`, or
+    /// `{"bits": 8 or 16, "size": bytes, "heads": ("ml", "map"[, "bayes"])}`. Scoring
+    /// always runs the float table; the section is kept so that the file round-trips.
+    #[getter]
+    fn quantized<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some((bits, size, bayes)) = self.quantized else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("bits", bits)?;
+        d.set_item("size", size)?;
+        let mut heads = vec![Head::Ml.name(), Head::Map.name()];
+        if bayes {
+            heads.push(Head::Bayes.name());
+        }
+        d.set_item("heads", PyTuple::new(py, heads)?)?;
+        Ok(Some(d))
     }
 
     /// The histogram of `head` (`"ml"` or `"map"`) for class `cls` (an index or a
@@ -309,8 +361,12 @@ impl PyTable {
             ),
             None => format!("ml={}, map={}", self.table.bins_ml(), self.table.bins_map()),
         };
+        let quantized = match self.quantized {
+            Some((bits, ..)) => format!(", quantized=int{bits}"),
+            None => String::new(),
+        };
         format!(
-            "Table(classes=[{}], bins=({bins}), edges={:?}, size={})",
+            "Table(classes=[{}], bins=({bins}), edges={:?}, size={}{quantized})",
             classes.join(", "),
             self.edges(),
             self.bytes.len()
@@ -350,10 +406,9 @@ impl PyTable {
                 .position(|c| c == name)
                 .ok_or_else(|| value_error(format!("{name:?} is not a class of the table")));
         }
-        let i: i64 = cls.extract()?;
-        usize::try_from(i)
-            .ok()
+        let i: arrays::Count = cls.extract()?;
+        i.value()
             .filter(|&i| i < k)
-            .ok_or_else(|| value_error(format!("class index {i} is not in 0..{k}")))
+            .ok_or_else(|| value_error(format!("class index {} is not in 0..{k}", i.text())))
     }
 }
