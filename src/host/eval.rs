@@ -398,7 +398,15 @@ mod tests {
         let titles: Vec<String> = Method::ALL.iter().map(|m| m.title()).collect();
         assert_eq!(
             titles,
-            ["sigmoid", "softmax", "temperature", "ML", "MAP", "Bayes", "open"]
+            [
+                "sigmoid",
+                "softmax",
+                "temperature",
+                "ML",
+                "MAP",
+                "Bayes",
+                "open"
+            ]
         );
         assert_eq!("map".parse(), Ok(Method::Map));
         assert_eq!("bayes".parse(), Ok(Method::Bayes));

@@ -17,8 +17,9 @@ fn columns(prefix: &[&str], table: &DynTable) -> Vec<String> {
 
 #[test]
 fn apply_writes_the_design_columns_and_the_layer_scores() {
-    // Version 1 (ML and MAP) and version 2 (with the Bayes head, its columns after
-    // the MAP ones).
+    // Version 1 (ML and MAP), version 2 (with the Bayes head, its columns after the
+    // MAP ones) and version 3 (the open head's after the Bayes head's).
+    let v2 = repo("tests/golden/layer/small_bayes.mlmap");
     for table_path in [golden_table(), bayes_table()] {
         apply_writes_the_design_columns(&table_path);
     }
@@ -28,7 +29,16 @@ fn apply_writes_the_design_columns_and_the_layer_scores() {
         header[6..9],
         ["bayes_car", "bayes_cyclist", "bayes_pedestrian"]
     );
-    assert_eq!(header[9..], ["ml_pred", "map_pred", "bayes_pred"]);
+    assert_eq!(
+        header[9..12],
+        ["open_car", "open_cyclist", "open_pedestrian"]
+    );
+    assert_eq!(
+        header[12..],
+        ["ml_pred", "map_pred", "bayes_pred", "open_pred"]
+    );
+    let table = read_table(&v2);
+    assert!(!columns(&[], &table).iter().any(|c| c.starts_with("open")));
 }
 
 fn apply_writes_the_design_columns(table_path: &str) {

@@ -19,7 +19,7 @@ fn inspect_text_and_json() {
         format!("table       {path}"),
         format!(
             "format      version {}, {} bytes, CRC-32 {crc:08x} (verified)",
-            mlmap::FORMAT_VERSION,
+            bytes[4],
             bytes.len()
         ),
         "classes     3: car, cyclist, pedestrian".to_string(),
@@ -52,7 +52,9 @@ fn inspect_text_and_json() {
     let v = ok_json(d, &["inspect", &path, "--format", "json"]);
     assert_eq!(v["crc_ok"], true);
     assert_eq!(v["bytes"], bytes.len());
-    assert_eq!(v["format_version"], mlmap::FORMAT_VERSION);
+    // The file's own version (the golden table is a version-1 file: ML and MAP only).
+    assert_eq!(v["format_version"], 1);
+    assert_eq!(v["open"], Value::Null);
     assert_eq!(v["bins_ml"], 22);
     assert_eq!(v["bins_map"], 17);
     assert_eq!(v["edge_mode"], "linspace");
@@ -199,4 +201,38 @@ fn inspect_shows_the_bayes_head() {
     // A version-1 table has none.
     let run = ok(d, &["inspect", &golden_table()]);
     assert!(run.stdout.contains("\nBayes head  none\n"));
+}
+
+#[test]
+fn inspect_shows_the_open_head() {
+    let dir = tempdir();
+    let d = dir.path();
+    let path = bayes_table();
+    let run = ok(d, &["inspect", &path]);
+    assert!(
+        run.stdout.contains("format      version 3, 1704 bytes"),
+        "{}",
+        run.stdout
+    );
+    assert!(
+        run.stdout
+            .lines()
+            .any(|l| l.starts_with("open head   temperature 1, epsilon 0e0")),
+        "{}",
+        run.stdout
+    );
+    let v = ok_json(d, &["inspect", &path, "--format", "json"]);
+    assert_eq!(v["format_version"], 3);
+    assert_eq!(v["open"]["temperature"], 1.0);
+    assert_eq!(v["open"]["epsilon"], 0.0);
+    // A version-2 table (a Bayes head, no open head).
+    let v2 = repo("tests/golden/layer/small_bayes.mlmap");
+    let v = ok_json(d, &["inspect", v2.to_str().unwrap(), "--format", "json"]);
+    assert_eq!(v["format_version"], 2);
+    assert_eq!(v["open"], Value::Null);
+    // The small open table: T = 1.75, epsilon = 0.05 as the reference encoder wrote them.
+    let open = repo("tests/golden/layer/small_open.mlmap");
+    let v = ok_json(d, &["inspect", open.to_str().unwrap(), "--format", "json"]);
+    assert_eq!(v["open"]["temperature"].as_f64().unwrap() as f32, 1.75);
+    assert_eq!(v["open"]["epsilon"].as_f64().unwrap() as f32, 0.05);
 }

@@ -32,15 +32,15 @@ fn a_newer_table_format_names_the_versions_read() {
     let d = dir.path();
     let mut bytes = std::fs::read(bayes_table()).unwrap();
     // The version follows the 4-byte magic; the CRC-32 of the rest ends the file.
-    bytes[4] = 3;
+    bytes[4] = 4;
     let body = bytes.len() - 4;
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&bytes[..body]);
     bytes[body..].copy_from_slice(&crc.to_le_bytes());
-    std::fs::write(d.join("v3.mlmap"), &bytes).unwrap();
+    std::fs::write(d.join("v4.mlmap"), &bytes).unwrap();
     refused(
         d,
-        &["inspect", "v3.mlmap"],
-        &["version 3 is not supported (this build reads versions 1 to 2)"],
+        &["inspect", "v4.mlmap"],
+        &["version 4 is not supported (this build reads versions 1 to 3)"],
     );
 }
 
@@ -187,10 +187,11 @@ fn a_tune_grid_past_the_cap_is_refused_before_reading() {
     assert!(run.stderr.contains("at most 20000"), "{run:?}");
     let run = mlmap(d, &[&base[..], &["--bins-ml", "1..65535"]].concat());
     assert_eq!(run.code, 2, "{run:?}");
-    // 65535 bin counts x 22 lambdas, plus 37 x 22 MAP and 37 x 22 Bayes candidates.
+    // 65535 bin counts x 22 lambdas, plus 37 x 22 MAP and 37 x 22 Bayes candidates, and
+    // the open head's 50 epsilons.
     assert!(
         run.stderr
-            .contains("the grid holds 1443398 candidates (ml 1441770, map 814, bayes 814"),
+            .contains("the grid holds 1443448 candidates (ml 1441770, map 814, bayes 814, open 50"),
         "{run:?}"
     );
     assert!(run.stderr.contains("at most 20000"), "{run:?}");

@@ -364,7 +364,7 @@ struct LayerHead {
 }
 
 /// Every head, in the order of the CLI's columns and reports.
-const HEADS: [LayerHead; 3] = [ML, MAP, BAYES];
+const HEADS: [LayerHead; 4] = [ML, MAP, BAYES, OPEN];
 
 /// The maximum-likelihood head.
 const ML: LayerHead = LayerHead {
@@ -400,6 +400,22 @@ const BAYES: LayerHead = LayerHead {
         let cats = t.bayes().map_or(0, |b| b.categories());
         let (mut out, mut scratch) = (vec![0f32; t.k()], vec![0f32; cats]);
         t.bayes_into::<FastMath>(x, os, &mut out, &mut scratch)
+            .unwrap();
+        out
+    },
+    bins: |t| t.bayes().map_or(0, |b| b.bins()),
+    lambda: |t| t.bayes().map_or(0.0, |b| b.lambda()),
+};
+
+/// The open head, with its device default backend `FastMath` (DESIGN §1.8); its bins and
+/// lambda are its Bayes head's.
+const OPEN: LayerHead = LayerHead {
+    name: "open",
+    present: |t| t.open().is_some(),
+    scores: |t, x, os| {
+        let cats = t.bayes().map_or(0, |b| b.categories());
+        let (mut out, mut scratch) = (vec![0f32; t.k()], vec![0f32; cats]);
+        t.open_into::<FastMath>(x, os, &mut out, &mut scratch)
             .unwrap();
         out
     },

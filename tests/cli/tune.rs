@@ -5,8 +5,14 @@ use mlmap::{EdgeMode, UpperTail};
 
 use super::*;
 
-/// Candidates of [`tune_args`]' grid per head: 3 x 8 (ML), 2 x 8 (MAP), 2 x 8 (Bayes).
-const CANDIDATES: [(&str, usize); 3] = [("ml", 3 * 8), ("map", 2 * 8), ("bayes", 2 * 8)];
+/// Candidates of [`tune_args`]' grid per head: 3 x 8 (ML), 2 x 8 (MAP), 2 x 8 (Bayes),
+/// and the open head's 50 epsilons (0 and 1e-16 to 1e8, two per decade, DESIGN §4).
+const CANDIDATES: [(&str, usize); 4] = [
+    ("ml", 3 * 8),
+    ("map", 2 * 8),
+    ("bayes", 2 * 8),
+    ("open", 50),
+];
 
 /// Candidates are ordered within the guards first, each group by the objective's
 /// value (within the guards) or by how much they lose (beyond them).
@@ -186,7 +192,7 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
     let methods = &cmp["methods"];
     assert_eq!(
         keys(methods),
-        sorted(&["softmax", "temperature", "ml", "map", "bayes"])
+        sorted(&["softmax", "temperature", "ml", "map", "bayes", "open"])
     );
     // Softmax's accuracy, counted by hand: its decision is the largest logit (the
     // never-seen rows are background and do not count).
@@ -233,7 +239,7 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
         assert!(chosen["ood_mean"].as_f64().unwrap() > 0.0);
     }
     // The best head is the one with the lowest ECE among those within the guards.
-    let within: Vec<(&str, f64)> = ["ml", "map", "bayes"]
+    let within: Vec<(&str, f64)> = ["ml", "map", "bayes", "open"]
         .into_iter()
         .filter(|h| methods[*h]["within_guards"] == true)
         .map(|h| (h, methods[h]["ece"].as_f64().unwrap()))
@@ -257,7 +263,7 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
     let cols: Vec<&str> = header.split_whitespace().collect();
     assert_eq!(
         cols,
-        ["metric", "softmax", "temperature", "ml", "map", "bayes"]
+        ["metric", "softmax", "temperature", "ml", "map", "bayes", "open"]
     );
     for key in [
         "ece", "nll", "brier", "accuracy", "mAP", "auroc", "ood_mean",

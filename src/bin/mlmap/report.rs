@@ -203,36 +203,36 @@ pub fn candidates(
                 "  no candidate is within the accuracy and mAP guards: chose the one that loses least"
             );
         }
-        // The open head: its Bayes head is fixed, the search is over epsilon at one
-        // temperature.
+        // The open head: its Bayes head (bins, lambda) is the chosen one, the search is
+        // over epsilon at one temperature.
         let open = h.head == mlmap::Head::Open;
         if let Some(t) = cands.first().and_then(|c| c.temperature) {
             let _ = writeln!(
                 s,
-                "  temperature {t} (fitted by NLL on the validation rows), Bayes head as chosen"
+                "  temperature {t} (fitted by NLL on the validation rows), on the chosen Bayes head"
             );
         }
-        let (col_a, col_b) = if open {
-            ("", "epsilon")
+        let epsilon_header = if open {
+            format!(" {:>11}", "epsilon")
         } else {
-            ("bins", "lambda")
+            String::new()
         };
         let _ = writeln!(
             s,
-            "  {:>4} {:>5} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9}",
-            "rank", col_a, col_b, "ece", "nll", "brier", "accuracy", "mAP"
+            "  {:>4} {:>5} {:>11}{epsilon_header} {:>9} {:>9} {:>9} {:>9} {:>9}",
+            "rank", "bins", "lambda", "ece", "nll", "brier", "accuracy", "mAP"
         );
         for (i, c) in cands.iter().take(top).enumerate() {
-            let (a, b) = match (open, c.epsilon) {
-                (true, Some(e)) => (String::new(), e),
-                _ => (c.bins.to_string(), c.lambda),
+            let epsilon = match (open, c.epsilon) {
+                (true, Some(e)) => format!(" {e:>11.3e}"),
+                _ => String::new(),
             };
             let _ = writeln!(
                 s,
-                "  {:>4} {:>5} {:>11.3e} {:>9} {:>9} {:>9} {:>9} {:>9}{}",
+                "  {:>4} {:>5} {:>11.3e}{epsilon} {:>9} {:>9} {:>9} {:>9} {:>9}{}",
                 i + 1,
-                a,
-                b,
+                c.bins,
+                c.lambda,
                 fmt_opt(c.ece),
                 fmt_opt(c.nll),
                 fmt_opt(c.brier),
