@@ -3,12 +3,14 @@
 //! difference divided by N, so the fixed cost (start-up, reading the rows) cancels.
 //!
 //! ```text
-//! cargo run --release --features micromath --example instr_count -- map 16384
+//! cargo run --release --features micromath,std --example instr_count -- map 16384
 //! ```
 //!
 //! Kinds: `sigmoid`, `softmax`, `ml`, `map`, `map_fast` (MAP with the `FastMath`
 //! backend), `map_micromath` (MAP with `Micromath`), `bayes` and `bayes_fast` (the Bayes head with
-//! `Libm` and `FastMath`), `sigmoid_fast` (the Sigmoid layer
+//! `Libm` and `FastMath`), `open` (the open head as shipped: T = 1, epsilon = 0),
+//! `open_eps` (the open head with T = 1.37 and epsilon = 1e-3, an unknown category as
+//! `tune` chooses one), `sigmoid_fast` (the Sigmoid layer
 //! with `FastMath`), `q8_ml`, `q8_map`, `q8_bayes` (the quantized table, int8 codes
 //! `round(x / 0.08)` of the same rows), `q8_noop` (the loop around the quantized
 //! kinds), `q8_decode` (`QTable::from_bytes` of the section), `decode`, and `noop` (a layer that only copies the logits: the cost
@@ -32,11 +34,17 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
         eprintln!(
-            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_decode N"
+            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|open|open_eps|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_decode N"
         );
         return ExitCode::from(2);
     };
-    let table = Shipped::from_bytes(TABLE).expect("the shipped table decodes");
+    let mut table = Shipped::from_bytes(TABLE).expect("the shipped table decodes");
+    if kind == "open_eps" {
+        let d = mlmap::host::DynTable::from_table(&table)
+            .with_open(1.37, 1e-3)
+            .expect("valid open-head parameters");
+        table = Shipped::try_from(&d).expect("the same shape");
+    }
     let (xs, os) = detections(&table);
     if let Some(head) = kind.strip_prefix("q8_") {
         return quantized(&table, head, &xs, &os, n);
@@ -52,6 +60,7 @@ fn main() -> ExitCode {
         "map_micromath" => |t, x, o| t.map_with::<Micromath>(x, o),
         "bayes" => |t, x, o| t.bayes(x, o),
         "bayes_fast" => |t, x, o| t.bayes_with::<FastMath>(x, o),
+        "open" | "open_eps" => |t, x, o| t.open(x, o),
         "decode" => {
             let mut ok = 0usize;
             for _ in 0..n {
