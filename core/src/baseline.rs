@@ -75,9 +75,8 @@ pub fn softmax<M: Backend, const K: usize>(
 }
 
 /// `OS * softmax(x / T)_i`, the temperature-scaled Softmax layer (DESIGN §1.4) with a
-/// temperature `T > 0`: each logit is divided by `T` in `f32`, then the Softmax layer's
-/// computation follows (the maximum subtracted first; infinite logits as in
-/// [`softmax`]). The open head (DESIGN §1.8) ends in exactly this computation.
+/// temperature `T > 0`, in `f32`: `exp((x_i - max) / T)` normalised (infinite logits as
+/// in [`softmax`]). The open head (DESIGN §1.8) ends in exactly this computation.
 ///
 /// # Errors
 ///
@@ -102,7 +101,10 @@ pub fn temperature<M: Backend, const K: usize>(
     Ok(Scores(out))
 }
 
-/// [`temperature`] on checked inputs, into `out` (as many entries as `logits`).
+/// [`temperature`] on checked inputs, into `out` (as many entries as `logits`). The
+/// largest logit is subtracted before the division by `T`, so a finite logit never
+/// overflows to an infinite quotient however small `T` is: each argument of `exp` is
+/// `(x_i - max) / T <= 0`.
 #[inline(always)]
 pub(crate) fn temperature_into<M: Backend>(
     logits: &[f32],
@@ -110,21 +112,18 @@ pub(crate) fn temperature_into<M: Backend>(
     objectness: f32,
     out: &mut [f32],
 ) {
-    for (o, &x) in out.iter_mut().zip(logits) {
-        *o = x / temperature;
-    }
-    let max = out.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let max = logits.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     if max.is_infinite() {
         // All -inf, or some +inf: the limit puts equal mass on the largest entries.
-        let n = out.iter().filter(|&&x| x == max).count() as f32;
-        for o in out.iter_mut() {
-            *o = if *o == max { objectness / n } else { 0.0 };
+        let n = logits.iter().filter(|&&x| x == max).count() as f32;
+        for (o, &x) in out.iter_mut().zip(logits) {
+            *o = if x == max { objectness / n } else { 0.0 };
         }
         return;
     }
     let mut sum = 0.0;
-    for o in out.iter_mut() {
-        *o = M::exp(*o - max);
+    for (o, &x) in out.iter_mut().zip(logits) {
+        *o = M::exp((x - max) / temperature);
         sum += *o;
     }
     let scale = objectness / sum;
@@ -146,6 +145,29 @@ mod tests {
         for (g, w) in s.iter().zip(want) {
             assert!((*g as f64 - w).abs() < 1e-7, "{g} vs {w}");
         }
+    }
+
+    #[test]
+    fn temperature_never_overflows_a_finite_logit() {
+        // (x - max) / T: the two large logits differ by 9.75e30, which at T = 1e-6 puts
+        // all the mass on the larger; x / T alone would overflow both to +inf and split it.
+        let x = [1.305_761_2e36, -2.881_616_4, 1.305_771e36];
+        let s = temperature::<Libm, 3>(&x, 1e-6, 0.484).unwrap().0;
+        assert_eq!(s, [0.0, 0.0, 0.484]);
+        // At T = 1 the layer is the Softmax layer.
+        let x = [1.0, 2.0, 3.0];
+        assert_eq!(
+            temperature::<Libm, 3>(&x, 1.0, 1.0).unwrap(),
+            softmax::<Libm, 3>(&x, 1.0).unwrap()
+        );
+        // softmax([1, 2, 3] / 2) = [0.18632372, 0.30719589, 0.50648039].
+        let s = temperature::<Libm, 3>(&x, 2.0, 1.0).unwrap().0;
+        let want = [0.186_323_721_6, 0.307_195_890_1, 0.506_480_388_3];
+        for (g, w) in s.iter().zip(want) {
+            assert!((f64::from(*g) - w).abs() < 1e-7, "{g} vs {w}");
+        }
+        assert!(temperature::<Libm, 3>(&x, 0.0, 1.0).is_err());
+        assert!(temperature::<Libm, 3>(&x, f32::NAN, 1.0).is_err());
     }
 
     #[test]

@@ -93,23 +93,29 @@ pub fn open_reference(
 /// Bayes head's softmax, plus one more (`e^(l_u - m)`, whose argument carries the `f32`
 /// rounding of `ln(epsilon)`, of `K ln(1/B + lambda)` and of their sum: at most
 /// `(K + 4) u (|l_u| + 1)`), so it is within [`bayes_score_tolerance`] plus that. `p_i`
-/// is the temperature layer: each `z / T` rounds by `u |z / T|`, the subtraction of the
-/// largest by `u` of the larger, so each argument of `exp` is within `d = 4 u (Z + 1)`
-/// of the exact difference (`Z = max |z / T|` over the finite logits, `u = 2^-24`), `exp`
-/// adds [`FAST_MATH_MAX_REL_ERROR`] and the normalisation `(K + 1) u`: a relative
-/// `2 (2 d + e) + (K + 1) u`. The two add up, and the bound doubles the sum for the
-/// second-order terms.
+/// is the temperature layer: each argument `a_i = (z_i - max z) / T` carries the rounding
+/// of the subtraction and of the division, `2 u |a_i|` (`u = 2^-24`); an `a_i` below
+/// `-104` gives 0 in `f32` and is covered by the absolute slack, so with
+/// `A = min(max |a_i|, 104)` over the finite logits each argument is within
+/// `d = 4 u (A + 1)` of the exact one; `exp` adds [`FAST_MATH_MAX_REL_ERROR`] and the
+/// normalisation `(K + 1) u`: a relative `2 (2 d + e) + (K + 1) u`. The two add up, and
+/// the bound doubles the sum for the second-order terms.
 #[must_use]
 pub fn open_score_tolerance(head: &BayesView<'_>, params: &OpenParams, logits: &[f32]) -> f64 {
     const U: f64 = 1.0 / 16_777_216.0;
     let k = head.logits() as f64;
     let t = f64::from(params.temperature());
-    let z = logits
+    let top = logits
         .iter()
-        .map(|&x| (f64::from(x) / t).abs())
-        .filter(|z| z.is_finite())
-        .fold(0.0f64, f64::max);
-    let d = 4.0 * U * (z + 1.0);
+        .map(|&x| f64::from(x))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let a = logits
+        .iter()
+        .map(|&x| ((f64::from(x) - top) / t).abs())
+        .filter(|a| a.is_finite())
+        .fold(0.0f64, f64::max)
+        .min(104.0);
+    let d = 4.0 * U * (a + 1.0);
     let e = f64::from(FAST_MATH_MAX_REL_ERROR);
     let softmax = 2.0 * (2.0 * d + e) + (k + 1.0) * U;
     let lu = f64::from(params.log_unknown());
