@@ -3,7 +3,8 @@
 # `-machine mps2-an386`), with the table decoded from a calibration sector and the one
 # embedded at build time, and every score matches the host's float64 values
 # (`tools/firmware_expected.py`). Also shows the run can fail: a canary build with one
-# perturbed expected value must exit non-zero. Installs qemu-system-arm if missing; without
+# perturbed expected ML score and one perturbed open-head score must exit non-zero and
+# report both. Installs qemu-system-arm if missing; without
 # a Cortex-M4F toolchain the proof fails (MLMAP_ALLOW_SKIP=1 skips it outside CI).
 # Run from the repository root.
 set -euo pipefail
@@ -56,7 +57,7 @@ run_qemu() { # $1 = ELF; prints the firmware's output, returns QEMU's exit statu
         -semihosting-config enable=on,target=native -kernel "$1" </dev/null
 }
 
-section "canary: one perturbed expected value must fail the run"
+section "canary: perturbed expected values must fail the run"
 thumb_cargo build --release --features canary
 cp "$elf" "$work/canary.elf"
 status=0
@@ -66,6 +67,10 @@ sed 's/^/canary| /' "$work/canary.log"
 [[ $status -ne 124 ]] || fail "the canary firmware timed out"
 grep -qE '^[0-9]+ passed, [1-9][0-9]* failed$' "$work/canary.log" ||
     fail "the canary firmware did not report its failures"
+grep -qE '^FAIL .*: [a-z ]+ ML: got' "$work/canary.log" ||
+    fail "the canary firmware did not fail on its perturbed ML score"
+grep -qE '^FAIL .*: [a-z ]+ open: got' "$work/canary.log" ||
+    fail "the canary firmware did not fail on its perturbed open-head score"
 echo "ok: the canary firmware failed as it must (exit status $status)"
 
 section "build: cargo build --release --target $THUMB_TARGET (via $THUMB_VIA)"

@@ -2,13 +2,21 @@
 """Writes firmware/src/expected.rs: the inputs the firmware example scores on the emulated
 Cortex-M4F and the scores it must get, computed here in float64.
 
-This shares no code with the Rust crate: the table file (format version 2, with a Bayes
-head) is decoded here from docs/FORMAT.md (and checked by re-encoding it with
-tools/mlmap_ref.py), bins are found by comparing against the float32 edges the format
-defines, and ML and MAP are evaluated in float64 from docs/DESIGN.md §1.2. The Bayes head's
-scores come from the numpy reference (`mlmap_ref.bayes`, docs/DESIGN.md §1.6, float64). The
-firmware checks its float32 results against these values within a tolerance, and exactly
-where the answer is `OS / K`.
+This shares no code with the Rust crate: the table files (format version 3, with a Bayes
+head and the open head's temperature and epsilon) are decoded here from docs/FORMAT.md (and
+checked by re-encoding them with tools/mlmap_ref.py), bins are found by comparing against
+the float32 edges the format defines, and ML and MAP are evaluated in float64 from
+docs/DESIGN.md §1.2. The Bayes head's scores come from the numpy reference
+(`mlmap_ref.bayes`, docs/DESIGN.md §1.6, float64). The open head's (docs/DESIGN.md §1.8) are
+computed here in float64 from the decoded terms, rows, temperature and epsilon, and must
+agree with the numpy reference (`mlmap_ref.open_`) to 1e-12. The firmware checks its
+float32 results against these values within a tolerance, exactly where the answer is
+`OS / K`, and the open head's decision against the largest logit.
+
+Two tables are scored: the shipped one (`tables/default.mlmap`, temperature 1, epsilon 0),
+and a small one with an unknown category (`tests/golden/layer/small_open.mlmap`: K = 3,
+4 Bayes bins, a background category, temperature 1.75, epsilon 0.05), which the firmware
+decodes from its bytes.
 
 It also writes the quantized cases: int8 codes for the section of
 `tables/default_q8.mlmap` (whose scales and zero points are read here from the section's
@@ -45,6 +53,7 @@ DEFAULT_TABLE = os.path.join(ROOT, "tables", "default.mlmap")
 DEFAULT_OUT = os.path.join(ROOT, "firmware", "src", "expected.rs")
 TEST_CSV = os.path.join(ROOT, "examples", "data", "test.csv")
 QUANTIZED = os.path.join(ROOT, "tables", "default_q8.mlmap")
+SMALL_OPEN = os.path.join(ROOT, "tests", "golden", "layer", "small_open.mlmap")
 
 # Rows of examples/data/test.csv scored besides the synthetic cases.
 CSV_ROWS = 16
@@ -82,8 +91,14 @@ class Reader:
         return self.take(1)[0]
 
 
+# The open head's stored ranges (docs/DESIGN.md §1.8).
+MIN_TEMPERATURE, MAX_TEMPERATURE = np.float32(1e-6), np.float32(1e6)
+MIN_EPSILON, MAX_EPSILON = np.float32(2.0 ** -126), np.float32(1e30)
+
+
 def decode(data):
-    """The table as a dict, from the bytes of a version-2 `.mlmap` file."""
+    """The table as a dict, from the bytes of a version-2 or version-3 `.mlmap` file
+    (`open` is None for version 2, else the pair (temperature, epsilon))."""
     body, crc = data[:-4], struct.unpack("<I", data[-4:])[0]
     if zlib.crc32(body) & 0xFFFFFFFF != crc:
         raise ValueError("CRC mismatch")
@@ -91,9 +106,9 @@ def decode(data):
     if r.take(4) != mlmap_ref.MAGIC:
         raise ValueError("not a table")
     version, k, bins_ml, bins_map = (r.varint() for _ in range(4))
-    if version != mlmap_ref.VERSION_2:
+    if version not in (mlmap_ref.VERSION_2, mlmap_ref.VERSION_3):
         raise ValueError(f"format version {version}: the firmware checks a table with a "
-                         "Bayes head (version 2)")
+                         "Bayes head (version 2 or 3)")
     bins_bayes, categories = r.varint(), r.varint()
     edge_mode, upper_tail = r.u8(), r.u8()
     lambda_ml, lambda_map = r.f32(), r.f32()
@@ -121,15 +136,24 @@ def decode(data):
                           .reshape(k, bins_bayes, categories).transpose(2, 0, 1).ravel())
     assert len(bayes["rows"]) == categories and len(bayes["ranges"]) == k
     assert len(bayes["terms"]) == categories * k * bins_bayes
+    open_ = None
+    if version == mlmap_ref.VERSION_3:
+        temperature, epsilon = r.f32(), r.f32()
+        if not MIN_TEMPERATURE <= temperature <= MAX_TEMPERATURE:
+            raise ValueError(f"temperature {temperature} out of range")
+        if np.signbit(epsilon) or not (epsilon == 0 or MIN_EPSILON <= epsilon <= MAX_EPSILON):
+            raise ValueError(f"epsilon {epsilon} out of range")
+        open_ = (temperature, epsilon)
     if r.pos != len(body):
         raise ValueError("trailing bytes")
     # The decoder and the independent encoder must agree byte for byte.
-    again = mlmap_ref.encode(classes, lambda_ml, lambda_map, edge_mode, upper_tail, bayes)
+    again = mlmap_ref.encode(classes, lambda_ml, lambda_map, edge_mode, upper_tail, bayes,
+                             open_)
     if again != bytes(data):
         raise ValueError("re-encoding the decoded table gives other bytes")
     return dict(k=k, bins_ml=bins_ml, bins_map=bins_map, edge_mode=edge_mode,
                 upper_tail=upper_tail, lambda_ml=lambda_ml, lambda_map=lambda_map,
-                classes=classes, bayes=bayes, crc=crc)
+                classes=classes, bayes=bayes, open=open_, crc=crc)
 
 
 def likelihood(x, lo, hi, freqs, upper_tail):
@@ -174,6 +198,72 @@ def layer(table, logits, os_):
 def bayes_scores(table, logits, os_):
     """float64 Bayes scores from the numpy reference (mlmap_ref.bayes)."""
     return [float(v) for v in mlmap_ref.bayes(table, [float(x) for x in logits], float(os_))]
+
+
+def bayes_bin(x, lo, hi, bins):
+    """The Bayes bin holding float32 `x` on the axis [lo, hi] (numpy's rule, last bin
+    closed), None outside the axis (no tail rule: outside is outside)."""
+    edges = mlmap_ref.edges_f32(lo, hi, bins)
+    if not (edges[0] <= x <= edges[-1]):
+        return None
+    for b in range(bins):
+        if edges[b] <= x < edges[b + 1] or (b == bins - 1 and x == edges[-1]):
+            return b
+    raise AssertionError("unreachable")
+
+
+def open_scores(table, logits, os_):
+    """float64 open-head scores (docs/DESIGN.md §1.8): OS * q * softmax(z / T), with q the
+    K classes' share of the posterior over the Bayes categories and the unknown one."""
+    b = table["bayes"]
+    temperature, epsilon = (float(v) for v in table["open"])
+    k, bins = table["k"], b["bins"]
+    lam = float(b["lambda"])
+    cats = len(b["rows"])
+    total = float(sum(b["rows"]))
+    terms = np.asarray(b["terms"], dtype=np.float64).reshape(cats, k, bins)
+    # l[c] = ln pi[c] + sum_j ln(h[c][j](z_j) + lambda), the stored terms inside an axis
+    # and ln(lambda) (h = 0) outside it.
+    l = []
+    for c in range(cats):
+        v = math.log(b["rows"][c] / total)
+        for j, (x, (lo, hi)) in enumerate(zip(logits, b["ranges"])):
+            i = bayes_bin(np.float32(x), lo, hi, bins)
+            v += math.log(lam) if i is None else float(terms[c, j, i])
+        l.append(v)
+    m = max(l)
+    e = [math.exp(v - m) for v in l]
+    unknown = 0.0
+    if epsilon > 0.0:
+        log_u = math.log(epsilon) + k * math.log(1.0 / bins + lam)
+        # Beyond e^700 the unknown outweighs the categories by more than 1e300: q is
+        # then below 1e-300, 0 for every tolerance used here.
+        unknown = math.exp(min(log_u - m, 700.0))
+    q = sum(e[:k]) / (sum(e) + unknown)
+    # softmax(z / T); infinite logits as their limit: equal shares of the largest.
+    z = [float(x) / temperature for x in logits]
+    top = max(z)
+    if math.isinf(top):
+        p = [1.0 if v == top else 0.0 for v in z]
+    else:
+        p = [math.exp(v - top) for v in z]
+    total_p = sum(p)
+    scores = [float(os_) * q * v / total_p for v in p]
+    # The numpy reference of the same definition must agree.
+    ref = mlmap_ref.open_(table, [float(x) for x in logits], float(os_))
+    for a, r in zip(scores, ref):
+        assert abs(a - float(r)) <= 1e-12 * max(1.0, abs(a)), (logits, os_, scores, list(ref))
+    return scores
+
+
+def decision(logits):
+    """The open head's decision (docs/DESIGN.md §1.8): the largest logit, the lower index
+    among equal ones."""
+    best = 0
+    for i, x in enumerate(logits):
+        if x > logits[best]:
+            best = i
+    return best
 
 
 def argmax(scores):
@@ -248,6 +338,57 @@ def cases(table):
         for row in list(csv.DictReader(fh))[:CSV_ROWS]:
             add(f"test.csv id {row['id']} ({row['label']})",
                 [float(row[c["name"]]) for c in cls], float(row["objectness"]))
+    return out
+
+
+def small_cases(table):
+    """(label, logits, objectness) triples for the small table with an unknown category:
+    every Bayes bin and edge, outside the axes (where the unknown category dominates),
+    infinite and tied logits, and a fixed pseudo-random grid. Logits stay within a few
+    units, where the float32 `z / T` of a temperature other than 1 rounds far below the
+    firmware's tolerance."""
+    f = np.float32
+    b = table["bayes"]
+    k, bins = table["k"], b["bins"]
+    edges = [mlmap_ref.edges_f32(lo, hi, bins) for lo, hi in b["ranges"]]
+    out = []
+
+    def add(label, logits, os_):
+        out.append((label, [f(v) for v in logits], f(os_)))
+
+    for i in range(bins):
+        add(f"inside Bayes bin {i} of every logit", [(e[i] + e[i + 1]) / 2 for e in edges], 1.0)
+        add(f"inside Bayes bin {i} of logit 0, bin {bins - 1 - i} of the others",
+            [(edges[0][i] + edges[0][i + 1]) / 2]
+            + [(e[bins - 1 - i] + e[bins - i]) / 2 for e in edges[1:]], 0.9)
+    for i in range(bins + 1):
+        add(f"on Bayes edge {i} of every logit", [e[i] for e in edges], 0.8)
+    add("one ulp below every Bayes axis", [np.nextafter(e[0], f(-np.inf)) for e in edges], 1.0)
+    add("one ulp above every Bayes axis", [np.nextafter(e[-1], f(np.inf)) for e in edges], 1.0)
+    mid = [(e[1] + e[2]) / 2 for e in edges]
+    for j in range(k):
+        xs = list(mid)
+        xs[j] = np.nextafter(edges[j][-1], f(np.inf))
+        add(f"logit {j} one ulp above its Bayes axis, others inside", xs, 1.0)
+        xs = list(mid)
+        xs[j] = edges[j][0] - 3.0
+        add(f"logit {j} below its Bayes axis, others inside", xs, 0.7)
+    for os_ in (1.0, 0.37, 1e-6, 0.0):
+        add(f"outside every Bayes axis, objectness {os_}",
+            [e[-1] + 1.5 if j % 2 else e[0] - 1.5 for j, e in enumerate(edges)], os_)
+    add("+inf in logit 1, others inside", [mid[0], np.inf, mid[2]], 1.0)
+    add("+inf in logits 0 and 2", [np.inf, mid[1], np.inf], 0.6)
+    add("+inf everywhere", [np.inf] * k, 1.0)
+    add("-inf everywhere", [-np.inf] * k, 0.5)
+    add("-inf in logit 0, others inside", [-np.inf] + mid[1:], 0.9)
+    add("tied largest logits 0 and 1", [1.0, 1.0, -1.0], 1.0)
+    add("tied largest logits 1 and 2", [-3.0, 0.5, 0.5], 0.8)
+    add("all logits equal", [0.25] * k, 1.0)
+    add("logits one ulp apart", [1.5, np.nextafter(f(1.5), f(2.0)), -2.0], 1.0)
+    rng = np.random.default_rng(1708)
+    for n in range(12):
+        xs = [rng.uniform(e[0] - 1.0, e[-1] + 1.0) for e in edges]
+        add(f"grid point {n}", xs, rng.choice([1.0, 0.8, 0.55]))
     return out
 
 
@@ -335,15 +476,58 @@ def lit64(v):
     return s if ("." in s or "e" in s) else s + ".0"
 
 
-def render(table, source):
+def case_lines(table, label, logits, os_, pad):
+    """The lines of one `Case` (its float64 scores for every head), indented by `pad`."""
     k = table["k"]
+    (ml, ml_uniform), (mp, map_uniform) = layer(table, logits, os_)
+    bayes = bayes_scores(table, logits, os_)
+    opened = open_scores(table, logits, os_)
+    # No evidence in a head: every score is exactly OS / K in float32.
+    share = np.float32(os_) / np.float32(k)
+    if ml_uniform:
+        assert all(abs(v - float(share)) < 1e-7 for v in ml)
+    if map_uniform:
+        assert all(abs(v - float(share)) < 1e-7 for v in mp)
+    lines = [
+        "Case {",
+        f"    label: {json.dumps(label)},",
+        f"    logits: [{', '.join(lit(x) for x in logits)}],",
+        f"    objectness: {lit(os_)},",
+    ]
+    for head, scores, uniform in (("ml", ml, ml_uniform), ("map", mp, map_uniform),
+                                  ("bayes", bayes, False)):
+        lines += [
+            f"    {head}: Expect {{",
+            f"        scores: [{', '.join(lit64(v) for v in scores)}],",
+            f"        uniform: {str(uniform).lower()},",
+            f"        argmax: {rust_opt(argmax(scores))},",
+            "    },",
+        ]
+    lines += [
+        "    open: OpenExpect {",
+        f"        scores: [{', '.join(lit64(v) for v in opened)}],",
+        f"        decision: {decision(logits)},",
+        "    },",
+        "},",
+    ]
+    return [pad + line for line in lines]
+
+
+def render(table, source, small, small_source):
+    k = table["k"]
+    if table["open"] is None or small["open"] is None:
+        raise ValueError("the firmware checks the open head: both tables must be version 3")
+    if small["k"] != k or [c["name"] for c in small["classes"]] != [
+            c["name"] for c in table["classes"]]:
+        raise ValueError("the small table must have the shipped table's classes")
     names = ", ".join(f'"{c["name"]}"' for c in table["classes"])
+    sb = small["bayes"]
     lines = [
         f"//! Inputs and expected scores for the firmware example, computed in float64 by",
-        f"//! `python3 tools/firmware_expected.py` from `{source}`.",
+        f"//! `python3 tools/firmware_expected.py` from `{source}` and `{small_source}`.",
         "//! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.",
         "",
-        "use crate::case::{Case, ErrorCase, Expect, QCase};",
+        "use crate::case::{Case, ErrorCase, Expect, OpenExpect, QCase};",
         "use mlmap::InferError;",
         "",
         "/// Number of classes of the table.",
@@ -352,41 +536,31 @@ def render(table, source):
         f"pub const CLASS_NAMES: [&str; K] = [{names}];",
         "/// CRC-32 of the table the values were computed from (its last four bytes).",
         f"pub const TABLE_CRC: u32 = 0x{table['crc']:08x};",
+        "/// The open head's temperature and epsilon stored in that table.",
+        f"pub const OPEN_PARAMS: (f32, f32) = ({lit(table['open'][0])}, {lit(table['open'][1])});",
         "",
-        "/// Valid detections and their float64 ML, MAP and Bayes scores.",
+        "/// Valid detections and their float64 ML, MAP, Bayes and open-head scores.",
         "pub static CASES: &[Case<K>] = &[",
     ]
     for label, logits, os_ in cases(table):
-        (ml, ml_uniform), (mp, map_uniform) = layer(table, logits, os_)
-        bayes = bayes_scores(table, logits, os_)
-        # No evidence in a head: every score is exactly OS / K in float32.
-        share = np.float32(os_) / np.float32(k)
-        if ml_uniform:
-            assert all(abs(v - float(share)) < 1e-7 for v in ml)
-        if map_uniform:
-            assert all(abs(v - float(share)) < 1e-7 for v in mp)
-        lines += [
-            "    Case {",
-            f"        label: {json.dumps(label)},",
-            f"        logits: [{', '.join(lit(x) for x in logits)}],",
-            f"        objectness: {lit(os_)},",
-            "        ml: Expect {",
-            f"            scores: [{', '.join(lit64(v) for v in ml)}],",
-            f"            uniform: {str(ml_uniform).lower()},",
-            f"            argmax: {rust_opt(argmax(ml))},",
-            "        },",
-            "        map: Expect {",
-            f"            scores: [{', '.join(lit64(v) for v in mp)}],",
-            f"            uniform: {str(map_uniform).lower()},",
-            f"            argmax: {rust_opt(argmax(mp))},",
-            "        },",
-            "        bayes: Expect {",
-            f"            scores: [{', '.join(lit64(v) for v in bayes)}],",
-            "            uniform: false,",
-            f"            argmax: {rust_opt(argmax(bayes))},",
-            "        },",
-            "    },",
-        ]
+        lines += case_lines(table, label, logits, os_, "    ")
+    lines += [
+        "];",
+        "",
+        f"/// Shape of `{small_source}`: ML bins, MAP bins, Bayes bins, Bayes categories.",
+        f"pub const SMALL_SHAPE: (usize, usize, usize, usize) = ({small['bins_ml']}, "
+        f"{small['bins_map']}, {sb['bins']}, {len(sb['rows'])});",
+        "/// CRC-32 of that table.",
+        f"pub const SMALL_TABLE_CRC: u32 = 0x{small['crc']:08x};",
+        "/// Its open head's temperature and epsilon (an unknown category of weight epsilon).",
+        f"pub const SMALL_OPEN_PARAMS: (f32, f32) = ({lit(small['open'][0])}, "
+        f"{lit(small['open'][1])});",
+        "",
+        "/// Valid detections on that table and their float64 scores.",
+        "pub static SMALL_CASES: &[Case<K>] = &[",
+    ]
+    for label, logits, os_ in small_cases(small):
+        lines += case_lines(small, label, logits, os_, "    ")
     with open(QUANTIZED, "rb") as fh:
         _, scales, zps = quantization(fh.read(), table["crc"])
     lines += [
@@ -403,26 +577,14 @@ def render(table, source):
     for n, (label, codes) in enumerate(quantized_cases(table, scales, zps)):
         os_ = np.float32([1.0, 0.8, 0.55][n % 3])
         logits = [np.float32(np.float32(q - z) * s) for q, z, s in zip(codes, zps, scales)]
-        (ml, ml_uniform), (mp, map_uniform) = layer(table, logits, os_)
-        bayes = bayes_scores(table, logits, os_)
         lines += [
             "    QCase {",
             f"        codes: [{', '.join(str(q) for q in codes)}],",
-            "        case: Case {",
-            f"            label: {json.dumps(label)},",
-            f"            logits: [{', '.join(lit(x) for x in logits)}],",
-            f"            objectness: {lit(os_)},",
         ]
-        for head, scores, uniform in (("ml", ml, ml_uniform), ("map", mp, map_uniform),
-                                      ("bayes", bayes, False)):
-            lines += [
-                f"            {head}: Expect {{",
-                f"                scores: [{', '.join(lit64(v) for v in scores)}],",
-                f"                uniform: {str(uniform).lower()},",
-                f"                argmax: {rust_opt(argmax(scores))},",
-                "            },",
-            ]
-        lines += ["        },", "    },"]
+        case = case_lines(table, label, logits, os_, "        ")
+        case[0] = "        case: Case {"
+        lines += case
+        lines += ["    },"]
     lines += ["];", "", "/// Inputs the layer must reject, and the error it must give.",
               "pub static ERROR_CASES: &[ErrorCase<K>] = &["]
     for label, logits, os_, err in error_cases(k):
@@ -490,8 +652,10 @@ def main(argv):
     out_path = args[1] if len(args) > 1 else DEFAULT_OUT
     with open(table_path, "rb") as fh:
         table = decode(fh.read())
+    with open(SMALL_OPEN, "rb") as fh:
+        small = decode(fh.read())
     source = os.path.relpath(os.path.abspath(table_path), ROOT)
-    text = render(table, source)
+    text = render(table, source, small, os.path.relpath(SMALL_OPEN, ROOT))
     if check:
         self_test()
         tolerance = firmware_tolerance() / 1000
@@ -508,8 +672,8 @@ def main(argv):
         return 0
     with open(out_path, "w") as fh:
         fh.write(text)
-    print(f"wrote {out_path}: {text.count('    Case {')} cases, "
-          f"{text.count('    ErrorCase {')} error cases")
+    print(f"wrote {out_path}: {text.count('    Case {')} cases (both tables, and the "
+          f"quantized ones), {text.count('    ErrorCase {')} error cases")
     return 0
 
 

@@ -647,6 +647,7 @@ fn score_k<const K: usize>(
         Head::Ml => v.ml_into(x, objectness, out, &mut scratch),
         Head::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
         Head::Bayes => score_bayes(v, x, objectness, out),
+        Head::Open => score_open(v, x, objectness, out),
     }
 }
 
@@ -662,6 +663,15 @@ fn score_bayes(
     let mut cats = [0.0f32; MAX_CATEGORIES];
     let c = v.bayes().map_or(0, |b| b.categories());
     v.bayes_into::<FastMath>(x, objectness, out, cats.get_mut(..c).unwrap_or(&mut []))
+}
+
+/// The open head (DESIGN §1.8), with the Bayes head's scratch and backend, as
+/// `Table::open`.
+#[inline(always)]
+fn score_open(v: &View<'_>, x: &[f32], objectness: f32, out: &mut [f32]) -> Result<(), InferError> {
+    let mut cats = [0.0f32; MAX_CATEGORIES];
+    let c = v.bayes().map_or(0, |b| b.categories());
+    v.open_into::<FastMath>(x, objectness, out, cats.get_mut(..c).unwrap_or(&mut []))
 }
 
 /// Scores one detection: logits `x` (K entries) into `out` (K entries).
@@ -685,6 +695,7 @@ fn score(
                         Head::Ml => v.ml_into(x, objectness, out, s),
                         Head::Map => v.map_into::<Libm>(x, objectness, out, s),
                         Head::Bayes => score_bayes(v, x, objectness, out),
+                        Head::Open => score_open(v, x, objectness, out),
                     }
                 }
             }

@@ -12,6 +12,15 @@ pub struct Expect<const K: usize> {
     pub argmax: Option<usize>,
 }
 
+/// What the open head (DESIGN §1.8) must answer for a detection.
+pub struct OpenExpect<const K: usize> {
+    /// The scores `OS * q * softmax(z / T)`, computed in float64 on the host.
+    pub scores: [f64; K],
+    /// The decided class (DESIGN §1.7): the detector's, the largest logit, the lower
+    /// index among equal ones.
+    pub decision: usize,
+}
+
 /// A valid detection.
 pub struct Case<const K: usize> {
     /// What the case exercises.
@@ -27,6 +36,8 @@ pub struct Case<const K: usize> {
     /// The Bayes head's answer (`uniform` is never set: outside every axis the answer is
     /// `OS * pi[c]`, checked within the tolerance like any other).
     pub bayes: Expect<K>,
+    /// The open head's answer.
+    pub open: OpenExpect<K>,
 }
 
 /// An input the layer must reject.

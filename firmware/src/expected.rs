@@ -1,8 +1,8 @@
 //! Inputs and expected scores for the firmware example, computed in float64 by
-//! `python3 tools/firmware_expected.py` from `tables/default.mlmap`.
+//! `python3 tools/firmware_expected.py` from `tables/default.mlmap` and `tests/golden/layer/small_open.mlmap`.
 //! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.
 
-use crate::case::{Case, ErrorCase, Expect, QCase};
+use crate::case::{Case, ErrorCase, Expect, OpenExpect, QCase};
 use mlmap::InferError;
 
 /// Number of classes of the table.
@@ -10,9 +10,11 @@ pub const K: usize = 3;
 /// The classes, in order: "car", "cyclist", "pedestrian".
 pub const CLASS_NAMES: [&str; K] = ["car", "cyclist", "pedestrian"];
 /// CRC-32 of the table the values were computed from (its last four bytes).
-pub const TABLE_CRC: u32 = 0x9756a697;
+pub const TABLE_CRC: u32 = 0x8d1d2417;
+/// The open head's temperature and epsilon stored in that table.
+pub const OPEN_PARAMS: (f32, f32) = (1.0, 0.0);
 
-/// Valid detections and their float64 ML, MAP and Bayes scores.
+/// Valid detections and their float64 ML, MAP, Bayes and open-head scores.
 pub static CASES: &[Case<K>] = &[
     Case {
         label: "inside ML bin 0 of every class",
@@ -32,6 +34,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.14101317897726148, 0.012859485009458632, 0.01318385774679128],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.1666028199556952, 0.00017829355825799785, 0.00027540821955819404],
+            decision: 0,
         },
     },
     Case {
@@ -53,6 +59,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.3136698470267275, 0.003121783628913896, 0.0036807901134429484],
+            decision: 0,
+        },
     },
     Case {
         label: "inside ML bin 21 of every class",
@@ -72,6 +82,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.2939420563712921, 0.16745261287464122, 0.3050544026369568],
             uniform: false,
             argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.669225788221726, 0.05057502959350347, 0.046648254067660676],
+            decision: 0,
         },
     },
     Case {
@@ -93,6 +107,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.1523939437935306, 0.0001804856793857216, 0.00027539236678672584],
+            decision: 0,
+        },
     },
     Case {
         label: "on inner ML edge 7 of every class",
@@ -112,6 +130,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.7906696850446393, 1.7322363641790336e-05, 3.491664453774115e-05],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.7834667560975331, 0.003131522986657607, 0.0041236449686281275],
+            decision: 0,
         },
     },
     Case {
@@ -133,6 +155,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        open: OpenExpect {
+            scores: [0.6093400571035456, 0.041610345493846304, 0.038853743823639375],
+            decision: 0,
+        },
     },
     Case {
         label: "on inner MAP edge 1 of every class",
@@ -152,6 +178,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.1998002122174363, 0.0007516557464325429, 0.0029502729274403275],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.2028608099951126, 0.0002550165045263867, 0.0003863143916701781],
+            decision: 0,
         },
     },
     Case {
@@ -173,6 +203,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.48123103588886035, 0.0037957067830229905, 0.004603233051855501],
+            decision: 0,
+        },
     },
     Case {
         label: "on the first ML edge of every class",
@@ -192,6 +226,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.14101317897726148, 0.012859485009458632, 0.01318385774679128],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.16664338012806826, 0.0001611461156505475, 0.0002519954897926028],
+            decision: 0,
         },
     },
     Case {
@@ -213,6 +251,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        open: OpenExpect {
+            scores: [0.6608265403663426, 0.05526785790790637, 0.05035467360864113],
+            decision: 0,
+        },
     },
     Case {
         label: "on the closed last MAP edge of every class",
@@ -232,6 +274,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.2204565422784691, 0.12558945965598092, 0.22879080197771762],
             uniform: false,
             argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.49561990527475697, 0.041450893430929774, 0.03776600520648086],
+            decision: 0,
         },
     },
     Case {
@@ -253,6 +299,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.9102265731033516, 5.992591189807842e-07, 8.599320849730973e-07],
+            decision: 0,
+        },
     },
     Case {
         label: "class 0 one ulp below its first ML edge",
@@ -272,6 +322,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.15269829951292604, 0.004751919773835583, 0.006684894885177962],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.16064056770069102, 0.0014351366934802435, 0.0020594097777683314],
+            decision: 0,
         },
     },
     Case {
@@ -293,6 +347,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.5663900621244856, 0.0, 0.0],
+            decision: 0,
+        },
     },
     Case {
         label: "class 1 one ulp above its last ML edge",
@@ -312,6 +370,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.476517687999569, 0.0035401571540012704, 0.00020644391560894777],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.0019153000030019138, 0.478343585634687, 5.4034314902925325e-06],
+            decision: 1,
         },
     },
     Case {
@@ -333,6 +395,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.5668083722556669, 0.00012061827913793258, 0.0015990759686771963],
+            decision: 0,
+        },
     },
     Case {
         label: "only class 1 in support, at its mean",
@@ -352,6 +418,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.010593986410893, 0.3253177435189333, 0.17389843009478967],
             uniform: false,
             argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.0, 0.5098101600246159, 0.0],
+            decision: 1,
         },
     },
     Case {
@@ -373,6 +443,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.0020082048848783706, 3.948129211195709e-06, 0.45696013848015404],
+            decision: 2,
+        },
     },
     Case {
         label: "class 2 one ulp below its first ML edge",
@@ -392,6 +466,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.6613078633501734, 0.00017305521176072484, 0.0003878987953446466],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.6603508203762702, 0.0012982491892118413, 0.00021974779179678738],
+            decision: 0,
         },
     },
     Case {
@@ -413,6 +491,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        open: OpenExpect {
+            scores: [0.0, 0.0, 0.5152110148516726],
+            decision: 2,
+        },
     },
     Case {
         label: "far above every support",
@@ -432,6 +514,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.3905649933487171, 0.05837999900579447, 0.1110549981087449],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.18666666348775215, 0.18666666348775215, 0.18666666348775215],
+            decision: 0,
         },
     },
     Case {
@@ -453,6 +539,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.18666666348775215, 0.18666666348775215, 0.18666666348775215],
+            decision: 0,
+        },
     },
     Case {
         label: "alternating far outside",
@@ -472,6 +562,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [7.692301921048765e-96, 0.7999999999999994, 7.692301921048765e-96],
+            decision: 1,
         },
     },
     Case {
@@ -493,6 +587,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.26666666666666644, 0.26666666666666644, 0.26666666666666644],
+            decision: 0,
+        },
     },
     Case {
         label: "-inf everywhere",
@@ -512,6 +610,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.2789749999999996, 0.04169999999999996, 0.0793250000000002],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.13333333333333322, 0.13333333333333322, 0.13333333333333322],
+            decision: 0,
         },
     },
     Case {
@@ -533,6 +635,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.0, 0.7999999999999994, 0.0],
+            decision: 1,
+        },
     },
     Case {
         label: "+inf in class 0, others inside",
@@ -552,6 +658,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.828893716742028, 0.00568200670646271, 0.007705444996899509],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.8422811684453904, 0.0, 0.0],
+            decision: 0,
         },
     },
     Case {
@@ -573,6 +683,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.6416175911350999, 0.0018921094723112972, 0.0],
+            decision: 0,
+        },
     },
     Case {
         label: "objectness 0.0",
@@ -592,6 +706,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.0, 0.0, 0.0],
             uniform: false,
             argmax: None,
+        },
+        open: OpenExpect {
+            scores: [0.0, 0.0, 0.0],
+            decision: 0,
         },
     },
     Case {
@@ -613,6 +731,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        open: OpenExpect {
+            scores: [0.20120622467962723, 0.02890590457875026, 0.04911070763627817],
+            decision: 0,
+        },
     },
     Case {
         label: "objectness 0.37",
@@ -632,6 +754,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.005248360117499333, 0.021925108962139325, 0.07613898190282219],
             uniform: false,
             argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.07444630409088812, 0.01069518483197169, 0.018170962059601028],
+            decision: 0,
         },
     },
     Case {
@@ -653,6 +779,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: None,
         },
+        open: OpenExpect {
+            scores: [2.0120622417163034e-07, 2.8905904505769868e-08, 4.911070751228555e-08],
+            decision: 0,
+        },
     },
     Case {
         label: "objectness 0, outside every support",
@@ -672,6 +802,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.0, 0.0, 0.0],
             uniform: false,
             argmax: None,
+        },
+        open: OpenExpect {
+            scores: [0.0, 0.0, 0.0],
+            decision: 0,
         },
     },
     Case {
@@ -693,6 +827,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.17477561062875924, 0.21343900505447777, 0.267399405887576],
+            decision: 2,
+        },
     },
     Case {
         label: "inside Bayes bin 11 of every logit",
@@ -712,6 +850,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.008028997919529485, 0.002445387255971787, 0.002008693827190511],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.007613886321731441, 0.0023586089677215165, 0.002510583713238826],
+            decision: 0,
         },
     },
     Case {
@@ -733,6 +875,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        open: OpenExpect {
+            scores: [0.6546817302982026, 0.058276623048792664, 0.05349071853589477],
+            decision: 0,
+        },
     },
     Case {
         label: "on inner Bayes edge 1 of every logit",
@@ -752,6 +898,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.4862266738516696, 0.11030988538857829, 0.07869840193580636],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.18891576209349684, 0.21676139948627982, 0.26955779959627757],
+            decision: 2,
         },
     },
     Case {
@@ -773,6 +923,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        open: OpenExpect {
+            scores: [0.08391196377274389, 0.04556029425640614, 0.05183891963604512],
+            decision: 0,
+        },
     },
     Case {
         label: "on the first Bayes edge of every logit",
@@ -792,6 +946,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.4787230454602543, 0.04375341886718573, 0.13313755724337298],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.16638746276151, 0.21626825038547756, 0.2729583084238255],
+            decision: 2,
         },
     },
     Case {
@@ -813,6 +971,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(2),
         },
+        open: OpenExpect {
+            scores: [0.5286612401707403, 0.0442142869851693, 0.040283739487187394],
+            decision: 0,
+        },
     },
     Case {
         label: "one ulp outside every Bayes axis",
@@ -832,6 +994,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [1.276535821617469e-07, 0.7999996629309644, 2.0941545277997144e-07],
+            decision: 1,
         },
     },
     Case {
@@ -853,6 +1019,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.17243848496470146, 0.0144217893173565, 0.013139725717941865],
+            decision: 0,
+        },
     },
     Case {
         label: "logit 0 below its Bayes axis, others inside",
@@ -872,6 +1042,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.18180826112006226, 0.06766075214565707, 0.05380176442467864],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [3.627626256395836e-05, 0.14688505081897732, 0.15634945060885672],
+            decision: 2,
         },
     },
     Case {
@@ -893,6 +1067,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.49234125971461706, 0.0008146247141061194, 0.0008659503200806622],
+            decision: 0,
+        },
     },
     Case {
         label: "test.csv id 25002 (pedestrian)",
@@ -912,6 +1090,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.00025984022606290885, 0.0015282907723322304, 0.6370638759354834],
             uniform: false,
             argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.0012596818096324595, 0.0006627609212186672, 0.6369295642030273],
+            decision: 2,
         },
     },
     Case {
@@ -933,6 +1115,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(1),
         },
+        open: OpenExpect {
+            scores: [0.00012837852032038507, 0.8820315701633568, 0.060281641766766855],
+            decision: 1,
+        },
     },
     Case {
         label: "test.csv id 25004 (cyclist)",
@@ -952,6 +1138,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.00032021718728819523, 0.7409789910885818, 0.02205894191531674],
             uniform: false,
             argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.00026456301310766843, 0.7617544517173288, 0.0013391354607503526],
+            decision: 1,
         },
     },
     Case {
@@ -973,6 +1163,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.5103032475924368, 0.0007046916934939616, 0.002373830901750562],
+            decision: 0,
+        },
     },
     Case {
         label: "test.csv id 25006 (car)",
@@ -992,6 +1186,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.4043306219973389, 0.00020531735791440991, 0.00011515105848113573],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.39254188312116334, 0.01107115802500159, 0.00103804926756951],
+            decision: 0,
         },
     },
     Case {
@@ -1013,6 +1211,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.30367501212106146, 7.569508263364129e-05, 0.00013677173651239677],
+            decision: 0,
+        },
     },
     Case {
         label: "test.csv id 25008 (pedestrian)",
@@ -1032,6 +1234,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.00011831176191749637, 0.0034503574292867787, 0.8256756420374969],
             uniform: false,
             argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.0014397429964820136, 0.0003412174692489389, 0.8274633507629702],
+            decision: 2,
         },
     },
     Case {
@@ -1053,6 +1259,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.628180063518208, 0.0006242694558083907, 0.0005275702034177099],
+            decision: 0,
+        },
     },
     Case {
         label: "test.csv id 25010 (car)",
@@ -1072,6 +1282,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.737323467146942, 1.0632209300664856e-05, 2.1431317369793472e-05],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.7355760531532944, 0.001086491808280486, 0.0006929857120375124],
+            decision: 0,
         },
     },
     Case {
@@ -1093,6 +1307,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.8805676371030864, 0.000576296435047489, 6.36132923620983e-05],
+            decision: 0,
+        },
     },
     Case {
         label: "test.csv id 25012 (car)",
@@ -1112,6 +1330,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.86226933029453, 4.2442519378457036e-05, 6.448112175073197e-05],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.8618757284267686, 0.0003802642559129431, 0.00012026125297788131],
+            decision: 0,
         },
     },
     Case {
@@ -1133,6 +1355,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.7098540298359369, 0.000354573101685546, 0.00027869406292681015],
+            decision: 0,
+        },
     },
     Case {
         label: "test.csv id 25014 (pedestrian)",
@@ -1152,6 +1378,10 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.00015287412440586538, 0.013572953862778297, 0.7586220836080071],
             uniform: false,
             argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.0004076384143308701, 6.338836614014789e-05, 0.7718768848147202],
+            decision: 2,
         },
     },
     Case {
@@ -1173,6 +1403,10 @@ pub static CASES: &[Case<K>] = &[
             uniform: false,
             argmax: Some(0),
         },
+        open: OpenExpect {
+            scores: [0.9114098585575983, 0.000365456776762323, 0.00016192736729537296],
+            decision: 0,
+        },
     },
     Case {
         label: "test.csv id 25016 (car)",
@@ -1192,6 +1426,1125 @@ pub static CASES: &[Case<K>] = &[
             scores: [0.8854658852591796, 1.692148614315698e-05, 2.08723198862832e-05],
             uniform: false,
             argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.8850663295918709, 0.000186031806180491, 0.00025131766715745263],
+            decision: 0,
+        },
+    },
+];
+
+/// Shape of `tests/golden/layer/small_open.mlmap`: ML bins, MAP bins, Bayes bins, Bayes categories.
+pub const SMALL_SHAPE: (usize, usize, usize, usize) = (4, 2, 4, 4);
+/// CRC-32 of that table.
+pub const SMALL_TABLE_CRC: u32 = 0xdf983d8f;
+/// Its open head's temperature and epsilon (an unknown category of weight epsilon).
+pub const SMALL_OPEN_PARAMS: (f32, f32) = (1.75, 0.05);
+
+/// Valid detections on that table and their float64 scores.
+pub static SMALL_CASES: &[Case<K>] = &[
+    Case {
+        label: "inside Bayes bin 0 of every logit",
+        logits: [-3.0, -1.5, -3.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.01470588190983788, 0.6029411802168252, 0.3823529378733369],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.010227764423320764, 0.055555663787531254, 0.934216571789148],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.30104894828357676, 0.11381118521359573, 0.1409090796291421],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.07651527561463077, 0.1803020065823847, 0.05749949219779217],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 0 of logit 0, bin 3 of the others",
+        logits: [-3.0, 1.5, -0.5],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.023684209318434284, 0.2605263113258328, 0.615789455513875],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.0133019339779533, 0.07225408615377288, 0.8144439560264158],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.0007092918613135791, 0.3077526450568561, 0.5624685085394874],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.045179843822121965, 0.5911558130199293, 0.18852346517223842],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 1 of every logit",
+        logits: [-1.0, -0.5, -2.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.01724137859053548, 0.5344827684211708, 0.44827585298829375],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.002770304518377817, 0.6731028641298267, 0.32412683135179554],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.2534046875084652, 0.2326555129905951, 0.1568695608586926],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.2204051417205043, 0.29329581046758685, 0.09353395719376184],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 1 of logit 0, bin 2 of the others",
+        logits: [-1.0, 0.5, -1.5],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.01874999899397761, 0.393749992843368, 0.4874999843207965],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.002792391791208469, 0.6784694245582932, 0.21873815980864045],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.12017340799738335, 0.27858380982316067, 0.27728322201505873],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.1580945030897613, 0.3725368027201942, 0.11880442923197627],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 2 of every logit",
+        logits: [1.0, 0.5, -1.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.30882353106333155, 0.30882353106333155, 0.3823529378733369],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.16064043424890737, 0.6347246852293001, 0.20463488052179252],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.2972602735690015, 0.10068493446891788, 0.12465753187535465],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.2542381786230184, 0.19105421826801688, 0.060928443010075696],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 2 of logit 0, bin 1 of the others",
+        logits: [1.0, -0.5, -2.5],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.24230768464880412, 0.3576923051878395, 0.29999998632149844],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.13131235856174558, 0.5188431906606843, 0.2498444269357122],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.3657136282588373, 0.04905914454526578, 0.041146378569213826],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.28284992950941756, 0.12003382948543624, 0.03827957532361296],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 3 of every logit",
+        logits: [3.0, 1.5, -0.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.5256410284270333, 0.14102564142364213, 0.33333333014932454],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.7324394435307876, 0.021802623417261708, 0.24575793305195076],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.0941498568900722, 0.35078417723866107, 0.4343041984001841],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.5081370883112227, 0.21563958216063323, 0.06876887676962701],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "inside Bayes bin 3 of logit 0, bin 0 of the others",
+        logits: [3.0, -1.5, -3.5],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.3416666588372332, 0.3416666588372332, 0.2166666584836757],
+            uniform: false,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.5881094825908211, 0.0175063340598332, 0.29438415950748786],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.8553908574985346, 0.0027768725633058058, 0.0023289898506652583],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.7518116925554782, 0.05745817617826011, 0.01832378915512309],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "on Bayes edge 0 of every logit",
+        logits: [-4.0, -2.0, -4.0],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.011764705703178077, 0.48235295136107914, 0.30588235485667176],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.01056453635210806, 0.011978390570057552, 0.7774570849987634],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.24083916221564453, 0.09104894952761164, 0.1127272653830808],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.04896171902818244, 0.1535299852064292, 0.04896171902818244],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "on Bayes edge 1 of every logit",
+        logits: [-2.0, -1.0, -3.0],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.013793103077961633, 0.4275862211084677, 0.35862068773449957],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.004919729728636715, 0.2705406801450792, 0.5245396020472131],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.2027237530275914, 0.1861244131659459, 0.12549565055698497],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.14564114242766724, 0.25790059987780256, 0.08224619243881681],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "on Bayes edge 2 of every logit",
+        logits: [0.0, 0.0, -2.0],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.15172414094493167, 0.28965517863471785, 0.35862069234127947],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.023419883942343775, 0.6460731609936736, 0.13050696698491157],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.2378082223988198, 0.08054794877539226, 0.0997260269863173],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.1746412233284883, 0.1746412233284883, 0.05569423129853488],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "on Bayes edge 3 of every logit",
+        logits: [2.0, 1.0, -1.0],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.3647058947160066, 0.1294117656997228, 0.30588235150519955],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.5629613777812928, 0.10312158000926502, 0.13391705413037105],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.07531988663441151, 0.2806273459726021, 0.3474433638974568],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.3633841446780816, 0.20520961175000213, 0.06544269081298176],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "on Bayes edge 4 of every logit",
+        logits: [4.0, 2.0, 0.0],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.420512829007756, 0.11282051482007036, 0.2666666680931026],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.36072752934966734, 0.009857122309539347, 0.4294153602617222],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.07531988663441151, 0.2806273459726021, 0.3474433638974568],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.44631345854921195, 0.14233228855328375, 0.04539070013856969],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "one ulp below every Bayes axis",
+        logits: [-4.0000005, -2.0000002, -4.0000005],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.3999999999999996, 0.20000000000000015, 0.20000000000000015],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.00017705372314383335, 0.0005551900492457586, 0.00017705372314383335],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "one ulp above every Bayes axis",
+        logits: [4.0000005, 2.0000002, 1e-45],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.3999999999999996, 0.20000000000000015, 0.20000000000000015],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.0006400763428915036, 0.00020412451512628654, 6.509663751563512e-05],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "logit 0 one ulp above its Bayes axis, others inside",
+        logits: [4.0000005, -0.5, -2.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.01724137859053548, 0.5344827684211708, 0.44827585298829375],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.002770304518377817, 0.6731028641298267, 0.32412683135179554],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.47569061726537426, 0.09419889265447155, 0.07900552147592739],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.26627206695010674, 0.020350179861369156, 0.006489805800512833],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "logit 0 below its Bayes axis, others inside",
+        logits: [-7.0, -0.5, -2.5],
+        objectness: 0.7,
+        ml: Expect {
+            scores: [0.012068964807841587, 0.37413793152328845, 0.313793091747941],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.0019392131298398686, 0.4711719968668672, 0.22688877808236393],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.33298342641508794, 0.06593922373519177, 0.055303864091329966],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.003722815936619838, 0.15274442020089196, 0.04871119719671239],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "logit 1 one ulp above its Bayes axis, others inside",
+        logits: [-1.0, 2.0000002, -2.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.035714285001538844, 0.035714285001538844, 0.9285714299969223],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.008403330687169754, 0.008403330687169754, 0.9831933386256605],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.13770491958658976, 0.4712369512093507, 0.1344262299022052],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.04612931267984975, 0.2561426327103478, 0.01957602769106965],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "logit 1 below its Bayes axis, others inside",
+        logits: [-1.0, -5.0, -2.5],
+        objectness: 0.7,
+        ml: Expect {
+            scores: [0.024999999075329737, 0.024999999075329737, 0.6499999899284116],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.005882331380843319, 0.005882331380843319, 0.6882353253173844],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.09639344206904227, 0.3298658602289633, 0.0940983593290581],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.14762950039586414, 0.015014125735436791, 0.06264995118885927],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "logit 2 one ulp above its Bayes axis, others inside",
+        logits: [-1.0, -0.5, 1e-45],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.03030302859261241, 0.9393939428147752, 0.03030302859261241],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.004082120624326418, 0.9918357587513472, 0.004082120624326418],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.28364780181364685, 0.17641509393779237, 0.3352201208220103],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.08141042954602876, 0.10833385159632858, 0.1441611777156855],
+            decision: 2,
+        },
+    },
+    Case {
+        label: "logit 2 below its Bayes axis, others inside",
+        logits: [-1.0, -0.5, -7.0],
+        objectness: 0.7,
+        ml: Expect {
+            scores: [0.021212119653588435, 0.6575757487718942, 0.021212119653588435],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.002857484388365822, 0.6942850193023393, 0.002857484388365822],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.1985534578882075, 0.12349056365342286, 0.23465408057927198],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.09890792730224074, 0.1316179852853275, 0.003207904632598496],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "outside every Bayes axis, objectness 1.0",
+        logits: [-5.5, 3.5, -5.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.3999999999999996, 0.20000000000000015, 0.20000000000000015],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [5.249857472530809e-06, 0.0008987977805883635, 5.249857472530809e-06],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "outside every Bayes axis, objectness 0.37",
+        logits: [-5.5, 3.5, -5.5],
+        objectness: 0.37,
+        ml: Expect {
+            scores: [0.12333333492279053, 0.12333333492279053, 0.12333333492279053],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.12333333492279053, 0.12333333492279053, 0.12333333492279053],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.14800000190734847, 0.07400000095367437, 0.07400000095367437],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [1.9424472898696705e-06, 0.0003325551831034963, 1.9424472898696705e-06],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "outside every Bayes axis, objectness 1e-06",
+        logits: [-5.5, 3.5, -5.5],
+        objectness: 1e-06,
+        ml: Expect {
+            scores: [3.3333333249174757e-07, 3.3333333249174757e-07, 3.3333333249174757e-07],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [3.3333333249174757e-07, 3.3333333249174757e-07, 3.3333333249174757e-07],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [3.999999989900967e-07, 1.9999999949504868e-07, 1.9999999949504868e-07],
+            uniform: false,
+            argmax: None,
+        },
+        open: OpenExpect {
+            scores: [5.249857459276192e-12, 8.987977783191173e-10, 5.249857459276192e-12],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "outside every Bayes axis, objectness 0.0",
+        logits: [-5.5, 3.5, -5.5],
+        objectness: 0.0,
+        ml: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.0, 0.0, 0.0],
+            uniform: false,
+            argmax: None,
+        },
+        open: OpenExpect {
+            scores: [0.0, 0.0, 0.0],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "+inf in logit 1, others inside",
+        logits: [-1.0, f32::INFINITY, -2.5],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.035714285001538844, 0.035714285001538844, 0.9285714299969223],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.008403330687169754, 0.008403330687169754, 0.9831933386256605],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.13770491958658976, 0.4712369512093507, 0.1344262299022052],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.0, 0.3218479730812672, 0.0],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "+inf in logits 0 and 2",
+        logits: [f32::INFINITY, -0.5, f32::INFINITY],
+        objectness: 0.6,
+        ml: Expect {
+            scores: [0.018181817878047946, 0.563636388085762, 0.018181817878047946],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.0024492724719211902, 0.5951014788980156, 0.0024492724719211902],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.3280000171803927, 0.04400000166882952, 0.10400000127823382],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.00785651399267876, 0.0, 0.00785651399267876],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "+inf everywhere",
+        logits: [f32::INFINITY, f32::INFINITY, f32::INFINITY],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.3999999999999996, 0.20000000000000015, 0.20000000000000015],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.0003030991651778084, 0.0003030991651778084, 0.0003030991651778084],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "-inf everywhere",
+        logits: [f32::NEG_INFINITY, f32::NEG_INFINITY, f32::NEG_INFINITY],
+        objectness: 0.5,
+        ml: Expect {
+            scores: [0.16666666666666666, 0.16666666666666666, 0.16666666666666666],
+            uniform: true,
+            argmax: None,
+        },
+        map: Expect {
+            scores: [0.16666666666666666, 0.16666666666666666, 0.16666666666666666],
+            uniform: true,
+            argmax: None,
+        },
+        bayes: Expect {
+            scores: [0.1999999999999998, 0.10000000000000007, 0.10000000000000007],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.0001515495825889042, 0.0001515495825889042, 0.0001515495825889042],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "-inf in logit 0, others inside",
+        logits: [f32::NEG_INFINITY, -0.5, -2.5],
+        objectness: 0.9,
+        ml: Expect {
+            scores: [0.015517240320415434, 0.4810344788359915, 0.4034482570017352],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.002493274000490829, 0.6057925616688211, 0.2917141404888301],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.4281215441974887, 0.08477900114314778, 0.07110496744469623],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.0, 0.20001480688495435, 0.06378603347749957],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "tied largest logits 0 and 1",
+        logits: [1.0, 1.0, -1.0],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.36206896789814924, 0.18965517335508225, 0.4482758587467685],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.3272685285805475, 0.2926659297819989, 0.3800655416374536],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.026004597468797963, 0.3639697039222123, 0.4506291354080692],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.3421583693509935, 0.3421583693509935, 0.10911654762930885],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "tied largest logits 1 and 2",
+        logits: [-3.0, 0.5, 0.5],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.03478260808721156, 0.7304347957465058, 0.03478260808721156],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.003265696548123804, 0.7934686188246813, 0.003265696548123804],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.018260869313784203, 0.2830434900385067, 0.3504347802150979],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.012191854564652126, 0.09008629732821827, 0.09008629732821827],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "all logits equal",
+        logits: [0.25, 0.25, 0.25],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.3333333333333333, 0.6363636373898871, 0.030303029276779542],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.05992366702804686, 0.9374212399529274, 0.00265509301902575],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.31911765046674323, 0.1595588252333713, 0.13382352847701406],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.09830068350018854, 0.09830068350018854, 0.09830068350018854],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "logits one ulp apart",
+        logits: [1.5, 1.5000001, -2.0],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.36206896789814924, 0.18965517335508225, 0.4482758587467685],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.5079778670218416, 0.030997201640170436, 0.461024931337988],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.021436535649429652, 0.3000334668822509, 0.1887798268749675],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.22779188201524087, 0.22779189753233192, 0.030828278871533683],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "grid point 0",
+        logits: [-1.1903464, 1.3483442, -4.0091834],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.06153846069200503, 0.6769230905369189, 0.06153846069200503],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.059195806650237826, 0.6816083986204533, 0.059195806650237826],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.0037931032298816145, 0.5363793195715074, 0.18379310245398278],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.06803085845595377, 0.29022071713713055, 0.013588140312074526],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "grid point 1",
+        logits: [0.6915085, -1.3182739, -4.7250786],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.20754716954608116, 0.7735849065887159, 0.018867923865202873],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.7514726700388591, 0.23120042825458959, 0.017326901706551275],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.608133969421859, 0.005023923193266839, 0.13062200795141432],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.2661547020141467, 0.08440533879296738, 0.012047836780645667],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "grid point 2",
+        logits: [-3.912767, -0.9095083, -0.6270843],
+        objectness: 0.55,
+        ml: Expect {
+            scores: [0.009482758430327762, 0.293965529003175, 0.24655172448742615],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.0038645453681538633, 0.29865067053189026, 0.24748479602088483],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.023181893160683135, 0.044238935974487685, 0.44837175340025],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.03669849656036015, 0.20415583229080267, 0.2399111660797072],
+            decision: 2,
+        },
+    },
+    Case {
+        label: "grid point 3",
+        logits: [-2.4532516, 1.4283609, -4.9379344],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.07692307471876315, 0.8461538505624737, 0.07692307471876315],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.10264618594963223, 0.7947076281007356, 0.10264618594963223],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.0008620688488383453, 0.5521551857994446, 0.34741377842439936],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.029827671454237446, 0.2741021488982672, 0.007211073228620495],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "grid point 4",
+        logits: [-1.4032651, -1.5638684, 0.84188145],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.018604650795298563, 0.7627907103303319, 0.018604650795298563],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.13341095910662346, 0.533178093707682, 0.13341095910662346],
+            uniform: false,
+            argmax: Some(1),
+        },
+        bayes: Expect {
+            scores: [0.29333333978972076, 0.016585364950607032, 0.34666666540936714],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.04269519039928643, 0.03895133207126768, 0.15401148468263984],
+            decision: 2,
+        },
+    },
+    Case {
+        label: "grid point 5",
+        logits: [-3.4474, 1.801052, -0.8853883],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.02631578882872398, 0.28947368691935926, 0.6842105242519168],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.013904497128929421, 0.022348467256852956, 0.9637470356142176],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.0007881020890037746, 0.3419473924550192, 0.6249650260442386],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.03609583090068537, 0.724363137827393, 0.1560511911225823],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "grid point 6",
+        logits: [-1.7031889, -2.5601723, -2.3547735],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.035714285001538844, 0.035714285001538844, 0.9285714299969223],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.00827715580633771, 0.00827715580633771, 0.9834456883873246],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.13770491958658976, 0.4712369512093507, 0.1344262299022052],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.13981650122961767, 0.08568056702914237, 0.09635090482250716],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "grid point 7",
+        logits: [0.759822, -1.8817863, -3.3314178],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.14102564142364213, 0.5256410284270333, 0.33333333014932454],
+            uniform: false,
+            argmax: Some(1),
+        },
+        map: Expect {
+            scores: [0.3246653295519708, 0.009178576789776554, 0.6661560936582527],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.8044303817258, 0.00981012584314461, 0.008227847336009217],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.5854705210679876, 0.12940219482891108, 0.05651830191916616],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "grid point 8",
+        logits: [-2.098693, 1.9973804, -1.8644766],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.02631578882872398, 0.28947368691935926, 0.6842105242519168],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.012085739251564412, 0.013737408016996926, 0.9741768527314386],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.0010094430289608527, 0.4379843885725404, 0.40680557854286004],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.06299116801853537, 0.6543273905920399, 0.07201197543206872],
+            decision: 1,
+        },
+    },
+    Case {
+        label: "grid point 9",
+        logits: [2.964147, 2.2403202, -4.4805293],
+        objectness: 0.8,
+        ml: Expect {
+            scores: [0.7515151654502686, 0.024242423235330178, 0.024242423235330178],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.791622247422112, 0.004188882249408494, 0.004188882249408494],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.5915151601666281, 0.05333333357574461, 0.05333333357574461],
+            uniform: false,
+            argmax: Some(0),
+        },
+        open: OpenExpect {
+            scores: [0.015081638354649754, 0.009972812474272825, 0.0002142476267294078],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "grid point 10",
+        logits: [-0.9515299, -2.7468498, -1.1260748],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.035714285001538844, 0.035714285001538844, 0.9285714299969223],
+            uniform: false,
+            argmax: Some(2),
+        },
+        map: Expect {
+            scores: [0.013240911837830792, 0.013240911837830792, 0.9735181763243385],
+            uniform: false,
+            argmax: Some(2),
+        },
+        bayes: Expect {
+            scores: [0.17554697140290926, 0.2756756780231295, 0.3271557241605199],
+            uniform: false,
+            argmax: Some(2),
+        },
+        open: OpenExpect {
+            scores: [0.16136683479065497, 0.057845935393022324, 0.14604872865735125],
+            decision: 0,
+        },
+    },
+    Case {
+        label: "grid point 11",
+        logits: [2.8685687, 1.0980189, -2.6167064],
+        objectness: 1.0,
+        ml: Expect {
+            scores: [0.45588236160183176, 0.16176470471417154, 0.38235293368399675],
+            uniform: false,
+            argmax: Some(0),
+        },
+        map: Expect {
+            scores: [0.5757856300177543, 0.10272258481928391, 0.3214917851629618],
+            uniform: false,
+            argmax: Some(0),
+        },
+        bayes: Expect {
+            scores: [0.05745682588353664, 0.46649472058421493, 0.0705539325147709],
+            uniform: false,
+            argmax: Some(1),
+        },
+        open: OpenExpect {
+            scores: [0.384601886975268, 0.13983539926560626, 0.016739410763203826],
+            decision: 0,
         },
     },
 ];
@@ -1224,6 +2577,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(0),
             },
+            open: OpenExpect {
+                scores: [0.26666666666666644, 0.26666666666666644, 0.26666666666666644],
+                decision: 0,
+            },
         },
     },
     QCase {
@@ -1246,6 +2603,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.44636000665128167, 0.06672000099420541, 0.1269200018912557],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.21333333651224753, 0.21333333651224753, 0.21333333651224753],
+                decision: 0,
             },
         },
     },
@@ -1270,6 +2631,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(1),
             },
+            open: OpenExpect {
+                scores: [0.02330924008254431, 0.02330924008254431, 0.02330924008254431],
+                decision: 0,
+            },
         },
     },
     QCase {
@@ -1292,6 +2657,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.5579499999999992, 0.08339999999999992, 0.1586500000000004],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [1.10530649145026e-09, 0.7999999977893866, 1.10530649145026e-09],
+                decision: 1,
             },
         },
     },
@@ -1316,6 +2685,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(0),
             },
+            open: OpenExpect {
+                scores: [0.7551859536027301, 3.8857065942569626e-07, 3.8857065942569626e-07],
+                decision: 0,
+            },
         },
     },
     QCase {
@@ -1338,6 +2711,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.009711154034582257, 0.2982079261727867, 0.15940689137434783],
                 uniform: false,
                 argmax: Some(1),
+            },
+            open: OpenExpect {
+                scores: [1.6401301222242615e-06, 0.46732269132147236, 1.6401301222242615e-06],
+                decision: 1,
             },
         },
     },
@@ -1362,6 +2739,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(2),
             },
+            open: OpenExpect {
+                scores: [1.721427280102959e-06, 1.721427280102959e-06, 0.8586815477771517],
+                decision: 2,
+            },
         },
     },
     QCase {
@@ -1384,6 +2765,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.6487334489310251, 6.853860777003832e-05, 5.2853965488452225e-05],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.6466165772094187, 0.0010743906305099458, 0.0011638736643551457],
+                decision: 0,
             },
         },
     },
@@ -1408,6 +2793,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(2),
             },
+            open: OpenExpect {
+                scores: [0.0008980857037496524, 0.00047355385095481745, 0.4605907913032113],
+                decision: 2,
+            },
         },
     },
     QCase {
@@ -1430,6 +2819,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [4.4510956218419945e-06, 0.6982352764297374, 0.27656541869410073],
                 uniform: false,
                 argmax: Some(1),
+            },
+            open: OpenExpect {
+                scores: [0.0001371290453805566, 0.9097472871217418, 0.06492073005233759],
+                decision: 1,
             },
         },
     },
@@ -1454,6 +2847,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(1),
             },
+            open: OpenExpect {
+                scores: [0.00025208535779639015, 0.7514556815784037, 0.0012485868318062392],
+                decision: 1,
+            },
         },
     },
     QCase {
@@ -1476,6 +2873,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.31969499502482684, 9.494396402145536e-05, 9.2208280871688e-05],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.3180860708346997, 0.0004157471664131342, 0.0013803292686072413],
+                decision: 0,
             },
         },
     },
@@ -1500,6 +2901,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(0),
             },
+            open: OpenExpect {
+                scores: [0.4177276916572987, 0.012364503962877589, 0.0011216823859791115],
+                decision: 0,
+            },
         },
     },
     QCase {
@@ -1522,6 +2927,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.7844531107970681, 1.0083150349019376e-05, 1.5663497027596325e-05],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.7839257422399069, 0.00019096112694634202, 0.00036215407759147405],
+                decision: 0,
             },
         },
     },
@@ -1546,6 +2955,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(2),
             },
+            open: OpenExpect {
+                scores: [0.000853273302309737, 0.0002021641194916145, 0.513538229481602],
+                decision: 2,
+            },
         },
     },
     QCase {
@@ -1568,6 +2981,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.9322811059657917, 3.3237583854635476e-05, 2.9200247439423692e-05],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.9307074867966117, 0.0008833314645244023, 0.0007527255359496897],
+                decision: 0,
             },
         },
     },
@@ -1592,6 +3009,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(0),
             },
+            open: OpenExpect {
+                scores: [0.760138777850154, 0.0011659092309716527, 0.0007214452547182523],
+                decision: 0,
+            },
         },
     },
     QCase {
@@ -1614,6 +3035,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.5349382154680736, 6.407494474314696e-06, 1.556859163597611e-05],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.5345525656892655, 0.00036840592184816316, 3.9219943070384824e-05],
+                decision: 0,
             },
         },
     },
@@ -1638,6 +3063,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(0),
             },
+            open: OpenExpect {
+                scores: [0.983666684369931, 0.00041949128477312145, 0.0001368715295892747],
+                decision: 0,
+            },
         },
     },
     QCase {
@@ -1660,6 +3089,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.7881460479006732, 2.1530402103857107e-05, 2.919766514596056e-05],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.7875467527055446, 0.0003638268938219823, 0.0002861963685562927],
+                decision: 0,
             },
         },
     },
@@ -1684,6 +3117,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(2),
             },
+            open: OpenExpect {
+                scores: [0.0002814604588002465, 4.126405967632068e-05, 0.519172623189319],
+                decision: 2,
+            },
         },
     },
     QCase {
@@ -1707,6 +3144,10 @@ pub static QCASES: &[QCase<K>] = &[
                 uniform: false,
                 argmax: Some(0),
             },
+            open: OpenExpect {
+                scores: [0.9788286461269369, 0.00041742792148536403, 0.0001731419901566275],
+                decision: 0,
+            },
         },
     },
     QCase {
@@ -1729,6 +3170,10 @@ pub static QCASES: &[QCase<K>] = &[
                 scores: [0.7905063395831688, 1.5106784229658908e-05, 1.8633920816819705e-05],
                 uniform: false,
                 argmax: Some(0),
+            },
+            open: OpenExpect {
+                scores: [0.7901501876419811, 0.00016401838687950794, 0.00022587425935463273],
+                decision: 0,
             },
         },
     },

@@ -11,11 +11,20 @@
 //! ([`mlmap::embedded::quantized::QUANTIZED`], and `QTable::from_bytes` of the embedded
 //! section's bytes), and scores int8 codes with its three heads.
 //!
-//! It scores the detections of [`expected`] with the three heads (ML, MAP, Bayes) of both
-//! tables and compares them with the float64 values computed on the host by
-//! `tools/firmware_expected.py`: within [`TOLERANCE`], exactly `OS / K` where no class has
-//! ML or MAP evidence, the same predicted class, and the same error for invalid inputs. It prints `N passed, M failed` over
-//! semihosting and exits with a non-zero status if anything failed.
+//! It scores the detections of [`expected`] with the four heads (ML, MAP, Bayes and the
+//! open head of DESIGN §1.8) of both tables and compares them with the float64 values
+//! computed on the host by `tools/firmware_expected.py`: within [`TOLERANCE`], exactly
+//! `OS / K` where no class has ML or MAP evidence, the same predicted class (for the open
+//! head: the decision is the largest logit), and the same error for invalid inputs.
+//!
+//! The shipped table's open head has no unknown category (epsilon 0). So that the
+//! unknown category is exercised too, a small table with one (`small_open.mlmap`:
+//! temperature 1.75, epsilon 0.05) is decoded from its bytes and checked the same way,
+//! and its sibling without background or unknown (`small_open_nobg.mlmap`, epsilon 0)
+//! must give bit for bit the temperature layer `OS * softmax(z / T)`.
+//!
+//! It prints `N passed, M failed` over semihosting and exits with a non-zero status if
+//! anything failed.
 #![no_std]
 #![no_main]
 
@@ -31,11 +40,15 @@ use cortex_m_semihosting::{debug, hprintln};
 use mlmap::embedded::quantized::{EmbeddedQTable, QUANTIZED, QUANTIZED_SECTION};
 use mlmap::embedded::{EmbeddedTable, TABLE};
 use mlmap::{
-    dequantize, DecodeError, FastMath, InferError, QTableError, Scores, FAST_MATH_MAX_SCORE_ERROR,
+    dequantize, DecodeError, FastMath, InferError, Libm, QTableError, Scores, Table,
+    FAST_MATH_MAX_SCORE_ERROR,
 };
 
-use case::{Case, Expect};
-use expected::{CASES, CLASS_NAMES, ERROR_CASES, K, QCASES, Q_SCALES, Q_ZERO_POINTS, TABLE_CRC};
+use case::{Case, Expect, OpenExpect};
+use expected::{
+    CASES, CLASS_NAMES, ERROR_CASES, K, OPEN_PARAMS, QCASES, Q_SCALES, Q_ZERO_POINTS, SMALL_CASES,
+    SMALL_OPEN_PARAMS, SMALL_SHAPE, SMALL_TABLE_CRC, TABLE_CRC,
+};
 
 /// Largest accepted difference between a score computed on the device (`f32`, libm) and
 /// the host's float64 value.
@@ -62,8 +75,31 @@ const _: () = assert!(
     "expected.rs was generated for another K"
 );
 
-/// Batch buffers (rows = every case).
-const ROWS: usize = CASES.len();
+/// The small table with an unknown category (DESIGN §1.8), as a flash sector would hold
+/// it: decoded at run time.
+const SMALL_FILE: &[u8] = include_bytes!("../../tests/golden/layer/small_open.mlmap");
+
+/// Its sibling without a background category and with epsilon 0.
+static SMALL_NOBG_FILE: &[u8] = include_bytes!("../../tests/golden/layer/small_open_nobg.mlmap");
+
+/// The shape of the small table: ML bins, MAP bins, Bayes bins, Bayes categories.
+const S_ML: usize = SMALL_SHAPE.0;
+const S_MAP: usize = SMALL_SHAPE.1;
+const S_BAYES: usize = SMALL_SHAPE.2;
+const S_CATS: usize = SMALL_SHAPE.3;
+
+/// The small table's type.
+type SmallTable = Table<K, S_ML, S_MAP, S_BAYES, S_CATS>;
+
+/// Its sibling's type: the same without the background category.
+type SmallNoBg = Table<K, S_ML, S_MAP, S_BAYES, K>;
+
+/// Batch buffers (rows = every case of the larger set).
+const ROWS: usize = if CASES.len() > SMALL_CASES.len() {
+    CASES.len()
+} else {
+    SMALL_CASES.len()
+};
 
 /// Counts and reports the checks.
 struct Report {
@@ -72,6 +108,7 @@ struct Report {
     max_err_ml: f64,
     max_err_map: f64,
     max_err_bayes: f64,
+    max_err_open: f64,
 }
 
 impl Report {
@@ -147,8 +184,76 @@ fn check_head(
     max_err
 }
 
-/// Every case with both heads of `t`.
-fn check_table(r: &mut Report, name: &str, t: &EmbeddedTable) {
+/// The open head's scores against the host's values and its decision against the
+/// largest logit; returns the largest deviation.
+fn check_open(
+    r: &mut Report,
+    table: &str,
+    head: &str,
+    case: &Case<K>,
+    got: Result<Scores<K>, InferError>,
+    want: &OpenExpect<K>,
+) -> f64 {
+    let got = match got {
+        Ok(s) => s,
+        Err(e) => {
+            r.check(
+                false,
+                case.label,
+                format_args!("{table} {head}: error {e:?}"),
+            );
+            return 0.0;
+        }
+    };
+    let mut max_err = 0.0f64;
+    let mut sum = 0.0f64;
+    let mut scores_ok = true;
+    #[allow(unused_mut)]
+    let mut want_scores = want.scores;
+    #[cfg(feature = "canary")]
+    if case.label == SMALL_CASES[0].label && head == "open" {
+        want_scores[1] += 1e-3;
+    }
+    for (&g, &w) in got.0.iter().zip(want_scores.iter()) {
+        let err = (f64::from(g) - w).abs();
+        max_err = max_err.max(err);
+        sum += f64::from(g);
+        // Every score in [0, OS] (DESIGN §1.8), and the host's value.
+        scores_ok &= err <= TOLERANCE && (0.0..=case.objectness).contains(&g);
+    }
+    scores_ok &= sum <= f64::from(case.objectness) * (1.0 + 1e-5);
+    r.check(
+        scores_ok,
+        case.label,
+        format_args!("{table} {head}: got {:?}, want {:?}", got.0, want_scores),
+    );
+    let decided = got.decide(&case.logits);
+    r.check(
+        decided == want.decision,
+        case.label,
+        format_args!(
+            "{table} {head}: decided {decided}, want the largest logit {}",
+            want.decision
+        ),
+    );
+    max_err
+}
+
+/// Every case with every head of `t`, and its open head's parameters.
+fn check_table<const B_ML: usize, const B_MAP: usize, const BB: usize, const C: usize>(
+    r: &mut Report,
+    name: &str,
+    t: &Table<K, B_ML, B_MAP, BB, C>,
+    cases: &[Case<K>],
+    open_params: (f32, f32),
+) {
+    let params = t.open_params().map(|p| (p.temperature(), p.epsilon()));
+    r.check(
+        params.map(|(a, b)| (a.to_bits(), b.to_bits()))
+            == Some((open_params.0.to_bits(), open_params.1.to_bits())),
+        "open head parameters",
+        format_args!("{name}: {params:?}, want {open_params:?}"),
+    );
     for (i, class) in CLASS_NAMES.iter().enumerate() {
         r.check(
             t.class_name(i) == Some(*class),
@@ -156,7 +261,7 @@ fn check_table(r: &mut Report, name: &str, t: &EmbeddedTable) {
             format_args!("{name}: class {i} is {:?}, want {class}", t.class_name(i)),
         );
     }
-    for case in CASES {
+    for case in cases {
         let logits = black_box(case.logits);
         let os = black_box(case.objectness);
         let e = check_head(r, name, "ML", case, t.ml(&logits, os), &case.ml);
@@ -165,6 +270,11 @@ fn check_table(r: &mut Report, name: &str, t: &EmbeddedTable) {
         r.max_err_map = r.max_err_map.max(e);
         let e = check_head(r, name, "Bayes", case, t.bayes(&logits, os), &case.bayes);
         r.max_err_bayes = r.max_err_bayes.max(e);
+        let e = check_open(r, name, "open", case, t.open(&logits, os), &case.open);
+        r.max_err_open = r.max_err_open.max(e);
+        let got = t.open_with::<Libm>(&logits, os);
+        let e = check_open(r, name, "open (libm)", case, got, &case.open);
+        r.max_err_open = r.max_err_open.max(e);
         // The fast-math backend stays within its documented bound of libm.
         match (t.map(&logits, os), t.map_with::<FastMath>(&logits, os)) {
             (Ok(exact), Ok(fast)) => {
@@ -194,6 +304,8 @@ fn check_table(r: &mut Report, name: &str, t: &EmbeddedTable) {
             ("MAP", t.map(&logits, os)),
             ("MAP FastMath", t.map_with::<FastMath>(&logits, os)),
             ("Bayes", t.bayes(&logits, os)),
+            ("open", t.open(&logits, os)),
+            ("open (libm)", t.open_with::<Libm>(&logits, os)),
         ] {
             r.check(
                 got == Err(case.error),
@@ -203,30 +315,30 @@ fn check_table(r: &mut Report, name: &str, t: &EmbeddedTable) {
         }
     }
     // The batch API gives, row by row, the per-detection answers.
+    let n = cases.len().min(ROWS);
     let mut logits = [[0.0f32; K]; ROWS];
     let mut os = [0.0f32; ROWS];
-    for (i, case) in CASES.iter().enumerate() {
+    for (i, case) in cases.iter().take(n).enumerate() {
         logits[i] = case.logits;
         os[i] = case.objectness;
     }
+    let (logits, os) = (&logits[..n], &os[..n]);
     let mut out = [[0.0f32; K]; ROWS];
-    for (head, result) in [
-        ("ML", t.ml_batch(&logits, Some(&os), &mut out).map(|()| out)),
-        (
-            "MAP",
-            t.map_batch(&logits, Some(&os), &mut out).map(|()| out),
-        ),
-        (
-            "Bayes",
-            t.bayes_batch(&logits, Some(&os), &mut out).map(|()| out),
-        ),
-    ] {
+    let out = &mut out[..n];
+    for head in ["ML", "MAP", "Bayes", "open"] {
+        let result = match head {
+            "ML" => t.ml_batch(logits, Some(os), out),
+            "MAP" => t.map_batch(logits, Some(os), out),
+            "Bayes" => t.bayes_batch(logits, Some(os), out),
+            _ => t.open_batch(logits, Some(os), out),
+        };
         let same = match result {
-            Ok(rows) => CASES.iter().zip(rows.iter()).all(|(c, row)| {
+            Ok(()) => cases.iter().zip(out.iter()).all(|(c, row)| {
                 let single = match head {
                     "ML" => t.ml(&c.logits, c.objectness),
                     "MAP" => t.map(&c.logits, c.objectness),
-                    _ => t.bayes(&c.logits, c.objectness),
+                    "Bayes" => t.bayes(&c.logits, c.objectness),
+                    _ => t.open(&c.logits, c.objectness),
                 };
                 single.is_ok_and(|s| s.0 == *row)
             }),
@@ -272,6 +384,9 @@ fn check_quantized(r: &mut Report, name: &str, q: &EmbeddedQTable) {
         r.max_err_bayes = r.max_err_bayes.max(e);
         // Bit for bit the f32 table's scores on the dequantized logits.
         let x = qc.case.logits;
+        let got = TABLE.open(&x, os);
+        let e = check_open(r, name, "f32 open", &qc.case, got, &qc.case.open);
+        r.max_err_open = r.max_err_open.max(e);
         let exact = q.ml(&codes, os) == TABLE.ml(&x, os)
             && q.map(&codes, os) == TABLE.map(&x, os)
             && q.bayes(&codes, os) == TABLE.bayes(&x, os);
@@ -365,6 +480,84 @@ fn decode(r: &mut Report) -> Option<EmbeddedTable> {
     Some(decoded)
 }
 
+/// The small table with an unknown category, decoded at run time from its bytes; a
+/// damaged copy is refused.
+fn decode_small(r: &mut Report) -> Option<SmallTable> {
+    let bytes: &'static [u8] = black_box(SMALL_FILE);
+    let crc = bytes
+        .get(bytes.len().saturating_sub(4)..)
+        .and_then(|b| b.try_into().ok())
+        .map(u32::from_le_bytes);
+    r.check(
+        crc == Some(SMALL_TABLE_CRC),
+        "small table CRC",
+        format_args!("{crc:x?}, but expected.rs was computed for {SMALL_TABLE_CRC:08x}"),
+    );
+    // A flipped bit in epsilon, the last value before the CRC.
+    let mut copy = [0u8; SMALL_FILE.len()];
+    copy.copy_from_slice(bytes);
+    copy[SMALL_FILE.len() - 6] ^= 0x01;
+    let damaged = SmallTable::from_bytes(black_box(&copy)).err();
+    r.check(
+        damaged == Some(DecodeError::Corrupted),
+        "damaged small table",
+        format_args!("got {damaged:?}, want Corrupted"),
+    );
+    match SmallTable::from_bytes(bytes) {
+        Ok(t) => Some(t),
+        Err(e) => {
+            r.check(false, "small table decode", format_args!("{e:?}"));
+            None
+        }
+    }
+}
+
+/// The open head with epsilon 0 and no background category is the temperature layer
+/// (DESIGN §1.8), bit for bit, on every case of the small table.
+fn check_temperature_identity(r: &mut Report) {
+    let t = match SmallNoBg::from_bytes(black_box(SMALL_NOBG_FILE)) {
+        Ok(t) => t,
+        Err(e) => {
+            r.check(
+                false,
+                "small table without background",
+                format_args!("{e:?}"),
+            );
+            return;
+        }
+    };
+    let Some(params) = t.open_params() else {
+        r.check(
+            false,
+            "small table without background",
+            format_args!("no open head"),
+        );
+        return;
+    };
+    r.check(
+        params.epsilon() == 0.0,
+        "small table without background",
+        format_args!("epsilon {}, want 0", params.epsilon()),
+    );
+    for case in SMALL_CASES {
+        let logits = black_box(case.logits);
+        let os = black_box(case.objectness);
+        let open = t.open(&logits, os);
+        let temp = mlmap::baseline::temperature::<FastMath, K>(&logits, params.temperature(), os);
+        let same = match (open, temp) {
+            (Ok(a), Ok(b)) => a.0.map(f32::to_bits) == b.0.map(f32::to_bits),
+            _ => false,
+        };
+        r.check(
+            same,
+            case.label,
+            format_args!(
+                "epsilon 0, no background: open {open:?} is not the temperature layer {temp:?}"
+            ),
+        );
+    }
+}
+
 #[entry]
 fn main() -> ! {
     hprintln!(
@@ -383,11 +576,28 @@ fn main() -> ! {
         max_err_ml: 0.0,
         max_err_map: 0.0,
         max_err_bayes: 0.0,
+        max_err_open: 0.0,
     };
     if let Some(decoded) = decode(&mut r) {
-        check_table(&mut r, "decoded at run time", &decoded);
+        check_table(&mut r, "decoded at run time", &decoded, CASES, OPEN_PARAMS);
     }
-    check_table(&mut r, "embedded at build time", black_box(&TABLE));
+    check_table(
+        &mut r,
+        "embedded at build time",
+        black_box(&TABLE),
+        CASES,
+        OPEN_PARAMS,
+    );
+    if let Some(small) = decode_small(&mut r) {
+        check_table(
+            &mut r,
+            "small table with an unknown category",
+            &small,
+            SMALL_CASES,
+            SMALL_OPEN_PARAMS,
+        );
+    }
+    check_temperature_identity(&mut r);
     if let Some(q) = decode_quantized(&mut r) {
         check_quantized(&mut r, "quantized, read at run time", &q);
     }
@@ -397,14 +607,17 @@ fn main() -> ! {
         black_box(&QUANTIZED),
     );
     hprintln!(
-        "{} detections and {} invalid inputs per table, {} int8 detections per quantized \
-         section; largest deviation from float64: ML {:e}, MAP {:e}, Bayes {:e} (tolerance {:e})",
+        "{} detections on the shipped table, {} on the small one, {} invalid inputs per \
+         table, {} int8 detections per quantized section; largest deviation from float64: \
+         ML {:e}, MAP {:e}, Bayes {:e}, open {:e} (tolerance {:e})",
         CASES.len(),
+        SMALL_CASES.len(),
         ERROR_CASES.len(),
         QCASES.len(),
         r.max_err_ml,
         r.max_err_map,
         r.max_err_bayes,
+        r.max_err_open,
         TOLERANCE
     );
     hprintln!("{} passed, {} failed", r.passed, r.failed);

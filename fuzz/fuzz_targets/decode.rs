@@ -1,15 +1,19 @@
 //! Any bytes either fail to decode or give a table that satisfies every table invariant
 //! of DESIGN §1.3 (5) and re-encodes to the very same bytes (DESIGN §3).
 //!
-//! Four fixed shapes (one with the shipped table's Bayes head) and the run-time shaped
-//! host table are tried, on the input as
-//! given and on the input with its last four bytes replaced by a valid CRC-32 (without
-//! that, almost every mutation would stop at the checksum).
+//! Six fixed shapes and the run-time shaped host table are tried: the shipped table's
+//! (format version 3, with its Bayes head and the open head's temperature and epsilon),
+//! the small Bayes tables' with and without background (versions 2 and 3, e.g.
+//! `tests/golden/layer/small_open.mlmap`), and three without a Bayes head (version 1); on
+//! the input as given and on the input with its last four bytes replaced by a valid
+//! CRC-32 (without that, almost every mutation would stop at the checksum). A table that
+//! decodes with the open head has parameters in their ranges (DESIGN §1.8), and one
+//! without it answers `NoOpenHead`.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use mlmap::host::DynTable;
-use mlmap::{DecodeError, Table};
+use mlmap::{DecodeError, InferError, Table};
 use mlmap_fuzz::{check_dyn_table, check_encoding, check_table, with_valid_crc};
 
 fuzz_target!(|data: &[u8]| {
@@ -34,6 +38,8 @@ fn decode_all(bytes: &[u8]) {
         (d.k(), d.bins_ml(), d.bins_map(), bayes.0, bayes.1)
     });
     decode_as::<3, 22, 17, 22, 4>(bytes, &dynt, shape);
+    decode_as::<3, 4, 2, 4, 4>(bytes, &dynt, shape);
+    decode_as::<3, 4, 2, 4, 3>(bytes, &dynt, shape);
     decode_as::<3, 22, 17, 0, 0>(bytes, &dynt, shape);
     decode_as::<2, 4, 3, 0, 0>(bytes, &dynt, shape);
     decode_as::<2, 1, 1, 0, 0>(bytes, &dynt, shape);
@@ -71,6 +77,31 @@ fn decode_as<
     if let Ok(t) = r {
         check_table(&t);
         check_encoding(&t, Some(bytes));
+        // The open head's parameters are in range (also checked by `check_table`), and
+        // the host reads the same ones; without them the head is refused.
+        let version = bytes.get(4).copied();
+        match t.open_params() {
+            Some(p) => {
+                assert_eq!(version, Some(3), "an open head outside version 3");
+                assert!(
+                    mlmap::invariants::check_open_params(p.temperature(), p.epsilon()).is_ok(),
+                    "decoded open head out of range: {p:?}"
+                );
+                let d = dynt.as_ref().ok().and_then(DynTable::open);
+                assert_eq!(d, Some(p), "DynTable reads another open head");
+            }
+            None if B_BAYES > 0 => {
+                assert_ne!(version, Some(3), "a version-3 table without the open head");
+                let scores = t.view().open_into::<mlmap::FastMath>(
+                    &[0.0; K],
+                    1.0,
+                    &mut [0.0; K],
+                    &mut [0.0; C],
+                );
+                assert_eq!(scores, Err(InferError::NoOpenHead));
+            }
+            None => {}
+        }
         if let Ok(d) = dynt {
             assert_eq!(
                 *d,

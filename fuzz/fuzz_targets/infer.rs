@@ -5,7 +5,11 @@
 //! formula of DESIGN §1.2, and ML, MAP (libm) and MAP (FastMath) all hold. The batch API
 //! and the host's `DynTable` must give the same bits. On the shipped table and on
 //! arbitrary tables given an arbitrary Bayes head, the Bayes head's invariants (DESIGN
-//! §1.6) and its formula are checked too.
+//! §1.6) and its formula are checked too; and, on the shipped table (temperature 1,
+//! epsilon 0 as fitted, or an arbitrary temperature and epsilon) and on arbitrary Bayes
+//! heads given an arbitrary temperature and epsilon, the open head's (DESIGN §1.8): its
+//! range and sum, the detector's decision, its formula, the temperature layer at epsilon
+//! 0 without background, and that a larger epsilon never raises a score.
 #![no_main]
 
 use std::sync::OnceLock;
@@ -13,7 +17,8 @@ use std::sync::OnceLock;
 use arbitrary::Unstructured;
 use libfuzzer_sys::fuzz_target;
 use mlmap_fuzz::{
-    check_detections, check_detections_with_bayes, ArbBayes, ArbTable, Shipped, SHIPPED,
+    check_detections, check_detections_with_bayes, check_detections_with_open, ArbBayes, ArbOpen,
+    ArbTable, Shipped, SHIPPED,
 };
 
 fn shipped() -> &'static Shipped {
@@ -23,22 +28,38 @@ fn shipped() -> &'static Shipped {
 
 fuzz_target!(|data: &[u8]| {
     let mut u = Unstructured::new(data);
-    let Ok(choice) = u.int_in_range(0u8..=6) else {
+    let Ok(choice) = u.int_in_range(0u8..=7) else {
         return;
     };
     match choice {
-        // The shipped table (with its Bayes head), where the FastMath error bound is
-        // documented.
+        // The shipped table (with its Bayes head and its open head as fitted), where the
+        // FastMath error bound is documented.
         0 => check_detections_with_bayes(shipped(), &mut u, true),
         1 => table::<3, 22, 17>(&mut u),
         2 => table::<2, 4, 3>(&mut u),
         3 => table::<4, 1, 2>(&mut u),
-        // Arbitrary Bayes heads: with background, without, one bin.
+        // Arbitrary Bayes heads with an arbitrary open head: with background, without,
+        // one bin.
         4 => bayes_table::<3, 22, 17, 5, 4>(&mut u),
         5 => bayes_table::<4, 1, 2, 3, 4>(&mut u),
-        _ => bayes_table::<2, 4, 3, 1, 3>(&mut u),
+        6 => bayes_table::<2, 4, 3, 1, 3>(&mut u),
+        // The shipped table with an arbitrary temperature and epsilon.
+        _ => shipped_open(&mut u),
     }
 });
+
+/// The shipped table given an arbitrary open head (skipped when its parameters are
+/// invalid), then detections on it.
+fn shipped_open(u: &mut Unstructured<'_>) {
+    let Ok(open) = u.arbitrary::<ArbOpen>() else {
+        return;
+    };
+    let Some(t) = open.attach(shipped()) else {
+        return;
+    };
+    let higher = open.attach_raised(shipped());
+    check_detections_with_open(&t, higher.as_ref(), u, true);
+}
 
 /// A structured arbitrary table (skipped when invalid), then detections on it.
 fn table<const K: usize, const B_ML: usize, const B_MAP: usize>(u: &mut Unstructured<'_>) {
@@ -50,7 +71,8 @@ fn table<const K: usize, const B_ML: usize, const B_MAP: usize>(u: &mut Unstruct
 }
 
 /// A structured arbitrary table with an arbitrary Bayes head (skipped when either is
-/// invalid), then detections on it.
+/// invalid) and an arbitrary open head (left out when its parameters are invalid: the
+/// version-2 table must then refuse the open head), then detections on it.
 fn bayes_table<
     const K: usize,
     const B_ML: usize,
@@ -60,13 +82,20 @@ fn bayes_table<
 >(
     u: &mut Unstructured<'_>,
 ) {
-    let (Ok(a), Ok(b)) = (
+    let (Ok(a), Ok(b), Ok(open)) = (
         u.arbitrary::<ArbTable<K, B_ML, B_MAP>>(),
         u.arbitrary::<ArbBayes<K, BB, C>>(),
+        u.arbitrary::<ArbOpen>(),
     ) else {
         return;
     };
     let Ok(t) = a.build() else { return };
     let Some(t) = b.attach(&t) else { return };
-    check_detections_with_bayes(&t, u, false);
+    match open.attach(&t) {
+        Some(with_open) => {
+            let higher = open.attach_raised(&t);
+            check_detections_with_open(&with_open, higher.as_ref(), u, false);
+        }
+        None => check_detections_with_bayes(&t, u, false),
+    }
 }

@@ -110,6 +110,7 @@ fn read_all(bytes: &[u8]) {
                                     Head::Ml => q.ml(&c, os),
                                     Head::Map => q.map(&c, os),
                                     Head::Bayes => q.bayes(&c, os),
+                                    Head::Open => unreachable!("not among the heads scored here"),
                                 })
                             }
                             (_, Ok(q)) => {
@@ -118,6 +119,7 @@ fn read_all(bytes: &[u8]) {
                                     Head::Ml => q.ml(&c, os),
                                     Head::Map => q.map(&c, os),
                                     Head::Bayes => q.bayes(&c, os),
+                                    Head::Open => unreachable!("not among the heads scored here"),
                                 })
                             }
                             _ => None,
@@ -153,7 +155,11 @@ fn take<const N: usize>(data: &mut &[u8]) -> [u8; N] {
 fn build(mut data: &[u8]) {
     let t = Shipped::from_bytes(SHIPPED).expect("the shipped table decodes");
     let d = &mut data;
-    let bits = if take::<1>(d)[0] % 2 == 0 { 8 } else { 16 };
+    let bits = if take::<1>(d)[0].is_multiple_of(2) {
+        8
+    } else {
+        16
+    };
     let (lo, hi) = mlmap::code_range(bits);
     let scales: [f32; 3] = std::array::from_fn(|_| f32::from_le_bytes(take::<4>(d)));
     let zps: [i32; 3] = std::array::from_fn(|_| i32::from(i16::from_le_bytes(take::<2>(d))));

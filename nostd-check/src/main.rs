@@ -11,6 +11,11 @@
 //!   `unwrap`, an overflow, a formatting panic) survives in decode or inference, the
 //!   handler is referenced and the link fails with an undefined symbol.
 //!
+//! Every head is linked: ML, MAP, Bayes and the open head (DESIGN §1.8), per detection,
+//! in batches and through the run-time shaped [`TableView`](mlmap::TableView) with
+//! slices of opaque lengths, on the shipped table and on a small table whose open head
+//! has an unknown category (epsilon > 0).
+//!
 //! Running the binary also checks a few results, so a build that links but computes
 //! nonsense does not pass: exit status 0 means every check held.
 #![no_std]
@@ -20,10 +25,20 @@ use core::ffi::{c_char, c_int};
 use core::hint::black_box;
 
 use mlmap::embedded::{EmbeddedTable, TABLE};
-use mlmap::{InferError, Scores};
+use mlmap::{FastMath, Head, InferError, Libm, Scores, Table};
 
 /// The table shipped with the crate, as firmware would read it from a flash sector.
 static TABLE_BYTES: &[u8] = include_bytes!("../../tables/default.mlmap");
+
+/// A small table whose open head has an unknown category (temperature 1.75, epsilon
+/// 0.05; K = 3, 4 ML bins, 2 MAP bins, 4 Bayes bins, 4 categories).
+static SMALL_OPEN_BYTES: &[u8] = include_bytes!("../../tests/golden/layer/small_open.mlmap");
+
+/// The same classes and Bayes head in format version 2: no open head.
+static SMALL_V2_BYTES: &[u8] = include_bytes!("../../tests/golden/layer/small_bayes.mlmap");
+
+/// The small tables' type.
+type SmallOpen = Table<3, 4, 2, 4, 4>;
 
 extern "C" {
     /// Deliberately defined nowhere: referencing it fails the link.
@@ -59,8 +74,38 @@ fn sane_at_most<const K: usize>(s: &Scores<K>, os: f32) -> bool {
     checked_sum(s, os) <= os + 1e-5
 }
 
-/// Scores one detection with every head of `table` (ML, MAP, Bayes) and checks the
-/// results.
+/// The index of the largest logit, the lower among equal ones: the open head's decision.
+fn largest(logits: &[f32; 3]) -> usize {
+    let (mut best, mut top) = (0, logits[0]);
+    for (i, &x) in logits.iter().enumerate() {
+        if x > top {
+            (best, top) = (i, x);
+        }
+    }
+    best
+}
+
+/// Scores one detection with the open head of `table` (FastMath, the default, and libm)
+/// and checks the results: in `[0, os]`, summing to at most `os`, the decision the
+/// largest logit.
+fn score_open<const B_ML: usize, const B_MAP: usize, const BB: usize, const C: usize>(
+    table: &Table<3, B_ML, B_MAP, BB, C>,
+    logits: &[f32; 3],
+    os: f32,
+) -> Result<u32, InferError> {
+    let mut failed = 0;
+    for open in [
+        table.open(logits, os)?,
+        table.open_with::<Libm>(logits, os)?,
+    ] {
+        failed += u32::from(!sane_at_most(&open, os));
+        failed += u32::from(open.decide(logits) != largest(logits));
+    }
+    Ok(failed)
+}
+
+/// Scores one detection with every head of `table` (ML, MAP, Bayes, open) and checks
+/// the results.
 fn score(table: &EmbeddedTable, logits: &[f32; 3], os: f32) -> Result<u32, InferError> {
     let mut failed = 0;
     let ml = table.ml(logits, os)?;
@@ -68,6 +113,7 @@ fn score(table: &EmbeddedTable, logits: &[f32; 3], os: f32) -> Result<u32, Infer
     let bayes = table.bayes(logits, os)?;
     failed += u32::from(!sane(&ml, os)) + u32::from(!sane(&map, os));
     failed += u32::from(!sane_at_most(&bayes, os));
+    failed += score_open(table, logits, os)?;
     failed += u32::from(ml.argmax() >= 3) + u32::from(table.class_name(map.argmax()).is_none());
     failed += u32::from(table.class_name(bayes.argmax()).is_none());
     #[cfg(feature = "micromath")]
@@ -116,6 +162,11 @@ fn run() -> u32 {
         ([1e6, -1e6, f32::INFINITY], 0.5),
         ([0.0, 0.0, 0.0], 0.0),
     ]);
+    // The small table with an unknown category: its open head, decoded at run time.
+    let small = match SmallOpen::from_bytes(black_box(SMALL_OPEN_BYTES)) {
+        Ok(t) => t,
+        Err(_) => return 101,
+    };
     for (logits, os) in &inputs {
         for table in [&decoded, embedded] {
             match score(table, logits, *os) {
@@ -123,11 +174,55 @@ fn run() -> u32 {
                 Err(_) => failed += 1,
             }
         }
+        match score_open(&small, logits, *os) {
+            Ok(f) => failed += f,
+            Err(_) => failed += 1,
+        }
     }
+    // Far outside every Bayes axis the unknown category outweighs the known ones: the
+    // open head's scores are far below the objectness.
+    match small.open(&black_box([-1e3, 1e3, -1e3]), 1.0) {
+        Ok(s) => failed += u32::from(s.confidence() >= 0.01 || s.decide(&[-1e3, 1e3, -1e3]) != 1),
+        Err(_) => failed += 1,
+    }
+    // A version-2 table has no open head: asking is an error, not a panic.
+    match SmallOpen::from_bytes(black_box(SMALL_V2_BYTES)) {
+        Ok(t) => failed += u32::from(t.open(&[0.0; 3], 1.0) != Err(InferError::NoOpenHead)),
+        Err(_) => failed += 1,
+    }
+
+    // The run-time shaped view, with slices of lengths the optimiser cannot see: a
+    // length that does not fit is an error, never an out-of-bounds access.
+    let view = decoded.view();
+    let x = black_box([5.1f32, -2.0, -1.3, 0.5]);
+    let mut out = [0.0f32; 4];
+    let mut scratch = [0.0f32; 5];
+    let (nx, no, ns) = black_box((3usize, 3usize, 4usize));
+    let (x, o, s) = (
+        x.get(..nx).unwrap_or(&[]),
+        out.get_mut(..no).unwrap_or(&mut []),
+        scratch.get_mut(..ns).unwrap_or(&mut []),
+    );
+    failed += u32::from(view.open_into::<FastMath>(x, 0.9, o, s).is_err());
+    failed += u32::from(
+        view.score_into(black_box(Head::Open), x, 0.9, o, s)
+            .is_err(),
+    );
+    let short = black_box(2usize);
+    failed += u32::from(
+        view.open_into::<FastMath>(x, 0.9, o, s.get_mut(..short).unwrap_or(&mut []))
+            .is_ok(),
+    );
+    failed += u32::from(
+        view.open_into::<Libm>(x.get(..short).unwrap_or(&[]), 0.9, o, s)
+            .is_ok(),
+    );
     // Invalid inputs are errors, not panics.
     let nan = black_box([f32::NAN, 0.0, 0.0]);
     failed += u32::from(decoded.ml(&nan, 1.0).is_ok() || decoded.map(&nan, 1.0).is_ok());
     failed += u32::from(decoded.bayes(&nan, 1.0).is_ok());
+    failed += u32::from(decoded.open(&nan, 1.0).is_ok() || small.open(&nan, 1.0).is_ok());
+    failed += u32::from(small.open(&[0.0; 3], black_box(f32::NAN)).is_ok());
     failed += u32::from(decoded.ml(&[0.0; 3], black_box(1.5)).is_ok());
     failed += u32::from(embedded.bayes(&[0.0; 3], black_box(1.5)).is_ok());
 
@@ -138,6 +233,13 @@ fn run() -> u32 {
     failed += u32::from(decoded.ml_batch(&logits, Some(&os), &mut out).is_err());
     failed += u32::from(embedded.map_batch(&logits, None, &mut out).is_err());
     failed += u32::from(decoded.bayes_batch(&logits, Some(&os), &mut out).is_err());
+    failed += u32::from(decoded.open_batch(&logits, Some(&os), &mut out).is_err());
+    failed += u32::from(small.open_batch(&logits, None, &mut out).is_err());
+    failed += u32::from(
+        embedded
+            .open_batch(&logits, Some(&os[..3]), &mut out)
+            .is_ok(),
+    );
     #[cfg(feature = "micromath")]
     {
         failed += u32::from(
