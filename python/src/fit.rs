@@ -611,7 +611,7 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
 #[pyfunction]
 #[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, classes=None,
                     objective="ece", bins_ml=None, bins_map=None, bins_bayes=None,
-                    bayes=true, lambda_min=1e-8, lambda_max=1e-1, lambdas_per_decade=3,
+                    bayes=true, lambda_min=1e-8, lambda_max=1.0, lambdas_per_decade=3,
                     lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
                     max_map_loss=0.01, edges="linspace", tail="zero", top=5))]
 #[allow(clippy::too_many_arguments)]
