@@ -326,7 +326,6 @@ impl RowSource for Loaded {
     }
 }
 
-
 /// Refuses data whose classes differ from the table's (names and order).
 ///
 /// # Errors
@@ -384,7 +383,11 @@ impl<'s, S: RowSource> WithBackground<'s, S> {
     /// training data's (names and order).
     pub fn new(train: &'s S, background: &'s [DataSource]) -> Result<Self, HostError> {
         for b in background {
-            check_classes(b.path(), b.classes(), train.classes().iter().map(String::as_str))?;
+            check_classes(
+                b.path(),
+                b.classes(),
+                train.classes().iter().map(String::as_str),
+            )?;
         }
         Ok(Self { train, background })
     }

@@ -391,8 +391,11 @@ impl Evaluation {
     /// Every method's `(key, value)` pairs on the whole test set, in [`Method::ALL`]
     /// order, the energy score included.
     pub fn columns(&self) -> Vec<Column> {
-        let methods: Vec<(Method, &Metrics)> =
-            self.methods.iter().map(|r| (r.method, &r.metrics)).collect();
+        let methods: Vec<(Method, &Metrics)> = self
+            .methods
+            .iter()
+            .map(|r| (r.method, &r.metrics))
+            .collect();
         self.columns_of(&methods, &self.energy.ranking)
     }
 

@@ -53,8 +53,7 @@ impl IsotonicMap {
             // Merge while the previous block's mean exceeds the current one's:
             // p1 / n1 > p2 / n2  <=>  p1 * n2 > p2 * n1, exactly in u128.
             while let Some(&prev) = blocks.last() {
-                if u128::from(prev.0) * u128::from(cur.1) > u128::from(cur.0) * u128::from(prev.1)
-                {
+                if u128::from(prev.0) * u128::from(cur.1) > u128::from(cur.0) * u128::from(prev.1) {
                     blocks.pop();
                     cur = (prev.0 + cur.0, prev.1 + cur.1, prev.2 + cur.2);
                 } else {
@@ -98,7 +97,12 @@ impl IsotonicMap {
         }
         // x[i] <= v < x[i + 1].
         let i = self.x.partition_point(|&x| x <= v).saturating_sub(1);
-        match (self.x.get(i), self.x.get(i + 1), self.y.get(i), self.y.get(i + 1)) {
+        match (
+            self.x.get(i),
+            self.x.get(i + 1),
+            self.y.get(i),
+            self.y.get(i + 1),
+        ) {
             (Some(&xa), Some(&xb), Some(&ya), Some(&yb)) => {
                 let t = (v - xa) / (xb - xa);
                 (ya + (yb - ya) * t).clamp(ya, yb)
@@ -126,7 +130,12 @@ impl Isotonic {
     ///
     /// As [`softmax`](super::softmax); [`InferError::Length`] also when the row does
     /// not have one logit per fitted class. Nothing is written on error.
-    pub fn score(&self, logits: &[f64], objectness: f64, out: &mut [f64]) -> Result<(), InferError> {
+    pub fn score(
+        &self,
+        logits: &[f64],
+        objectness: f64,
+        out: &mut [f64],
+    ) -> Result<(), InferError> {
         if self.maps.len() != out.len() {
             return Err(InferError::Length);
         }
@@ -167,7 +176,13 @@ pub fn fit_isotonic(rows: &Rows<'_>) -> Result<Isotonic, BaselineError> {
     for (r, out) in soft.chunks_exact_mut(k).enumerate() {
         let (logits, os) = rows.row(r).ok_or(BaselineError::Shape)?;
         check(logits, os, k).map_err(|error| BaselineError::Row { row: r, error })?;
-        if rows.labels.get(r).copied().flatten().is_some_and(|c| c >= k) {
+        if rows
+            .labels
+            .get(r)
+            .copied()
+            .flatten()
+            .is_some_and(|c| c >= k)
+        {
             return Err(BaselineError::Label { row: r });
         }
         scaled_softmax(logits, 1.0, os, out);
@@ -259,7 +274,13 @@ mod tests {
     fn pool_adjacent_violators_by_hand() {
         // Scores 0.1 .. 0.5 with targets 1, 0, 1, 0, 1: blocks {0.1, 0.2} at 1/2,
         // {0.3, 0.4} at 1/2 merge into one block of 1/2, then 0.5 at 1.
-        let m = fit(&[(0.3, true), (0.1, true), (0.2, false), (0.4, false), (0.5, true)]);
+        let m = fit(&[
+            (0.3, true),
+            (0.1, true),
+            (0.2, false),
+            (0.4, false),
+            (0.5, true),
+        ]);
         let (x, y) = m.knots();
         assert_eq!(x, [0.1, 0.2, 0.3, 0.4, 0.5]);
         assert_eq!(y, [0.5, 0.5, 0.5, 0.5, 1.0]);
@@ -304,7 +325,10 @@ mod tests {
         // ln(e + e^2 + e^3) = 3.40760596444438 (numpy).
         assert!((e - 3.407_605_964_444_38).abs() < 1e-13, "{e}");
         assert_eq!(negative_energy(&[f64::INFINITY, 0.0]), Ok(f64::INFINITY));
-        assert_eq!(negative_energy(&[f64::NEG_INFINITY; 2]), Ok(f64::NEG_INFINITY));
+        assert_eq!(
+            negative_energy(&[f64::NEG_INFINITY; 2]),
+            Ok(f64::NEG_INFINITY)
+        );
         assert!(negative_energy(&[0.0, f64::NAN]).is_err());
         assert!((negative_energy(&[1000.0, 1000.0]).unwrap() - (1000.0 + 2f64.ln())).abs() < 1e-9);
     }

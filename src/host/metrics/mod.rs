@@ -598,8 +598,7 @@ mod tests {
         // Known confidences 1.0 (row 0, labelled) against unseen 0.95, 0.9, 0.3.
         let known = known_confidences(&scores, 2, &[Some(0), None]);
         assert_eq!(known, [1.0]);
-        let against =
-            ood_metrics_against(&[0.95, 0.0, 0.9, 0.05, 0.3, 0.2], 2, &known).unwrap();
+        let against = ood_metrics_against(&[0.95, 0.0, 0.9, 0.05, 0.3, 0.2], 2, &known).unwrap();
         assert_eq!((against.auroc, against.fpr95), (Some(1.0), Some(0.0)));
         assert_eq!(against.ood_mean, ood.ood_mean);
     }

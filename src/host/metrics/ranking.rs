@@ -234,7 +234,10 @@ mod tests {
     fn separation_by_hand() {
         // Positives 3, 1, -1; negatives 1, -2: pairs 3>1, 3>-2, 1=1 (1/2), 1>-2, -1>-2,
         // -1<1: 4.5 of 6.
-        assert_eq!(separation_auroc(&[3.0, 1.0, -1.0], &[1.0, -2.0]), Some(0.75));
+        assert_eq!(
+            separation_auroc(&[3.0, 1.0, -1.0], &[1.0, -2.0]),
+            Some(0.75)
+        );
         assert_eq!(separation_auroc(&[-0.0], &[0.0]), Some(0.5));
         assert_eq!(separation_auroc(&[], &[1.0]), None);
         assert_eq!(separation_auroc(&[f64::NEG_INFINITY], &[-1e300]), Some(0.0));
