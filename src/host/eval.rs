@@ -666,7 +666,10 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
     };
     let mut group_results = Vec::with_capacity(groups.len());
     for (value, idx) in groups {
-        let g_labels: Vec<Option<usize>> = idx.iter().map(|&i| labels[i]).collect();
+        let g_labels: Vec<Option<usize>> = idx
+            .iter()
+            .map(|&i| labels.get(i).copied().flatten())
+            .collect();
         let g_logits = pick(&test.logits, k, &idx);
         let mut g_methods = Vec::with_capacity(methods.len());
         for r in &methods {
@@ -684,7 +687,10 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
             g_methods.push((r.method, m));
         }
         let g_energy = pick(&energy.test, 1, &idx);
-        let g_correct: Vec<bool> = idx.iter().map(|&i| correct[i]).collect();
+        let g_correct: Vec<bool> = idx
+            .iter()
+            .map(|&i| correct.get(i).copied().unwrap_or(false))
+            .collect();
         group_results.push(GroupResult {
             labelled: g_labels.iter().flatten().count(),
             rows: idx.len(),
