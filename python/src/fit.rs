@@ -681,6 +681,8 @@ pub fn tune<'py>(
         ],
         lambdas,
         bayes: bayes_grid,
+        // The open head's epsilon grid, as `mlmap tune` searches it.
+        epsilons: mlmap::host::tune::epsilon_grid(),
         objective: Objective::from_name(objective).map_err(|e| value_error(e.to_string()))?,
         guards,
         edges: EdgeMode::from_name(edges).map_err(|e| value_error(e.to_string()))?,
