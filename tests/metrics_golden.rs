@@ -230,3 +230,59 @@ fn temperature_fit_matches_grid_search() {
         assert_eq!(baselines::fit_temperature(&rows), Ok(fit.t));
     }
 }
+
+const SEPARATION: &str = include_str!("golden/metrics/separation.json");
+const ISOTONIC: &str = include_str!("golden/metrics/isotonic.json");
+
+/// Relative tolerance of the isotonic scores: both sides interpolate the same knots,
+/// but scikit-learn's pooled means and `numpy.interp` round differently from the
+/// exact block counts here, by a few units in the last place.
+const ISO_REL: f64 = 1e-12;
+
+#[test]
+fn unseen_separation_matches_reference() {
+    for case in cases(SEPARATION) {
+        let name = case["name"].as_str().unwrap();
+        let (known, unseen) = (vector(&case["known"]), vector(&case["unseen"]));
+        let exp = &case["expected"];
+        assert_opt(
+            metrics::separation_auroc(&known, &unseen),
+            &exp["auroc"],
+            &format!("{name}: ood_auroc"),
+        );
+        assert_opt(
+            metrics::fpr_at_95_tpr(&known, &unseen),
+            &exp["fpr95"],
+            &format!("{name}: ood_fpr95"),
+        );
+    }
+}
+
+#[test]
+fn isotonic_and_energy_match_reference() {
+    for case in cases(ISOTONIC) {
+        let name = case["name"].as_str().unwrap();
+        let (vx, k) = matrix(&case["val_logits"]);
+        let vl = labels(&case["val_labels"]);
+        let vo = vector(&case["val_objectness"]);
+        let iso = baselines::fit_isotonic(&Rows::new(&vx, k, &vl, &vo).unwrap()).unwrap();
+        let (tx, _) = matrix(&case["logits"]);
+        let to = vector(&case["objectness"]);
+        let rows = Rows::new(&tx, k, &[], &to).unwrap();
+        let got = baselines::score_isotonic(&iso, &rows).unwrap();
+        let (want, _) = matrix(&case["isotonic"]);
+        assert_eq!(got.len(), want.len());
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            let what = format!("{name}: isotonic row {} class {}", i / k, i % k);
+            assert_close(*g, *w, ISO_REL, &what);
+        }
+        let energy = baselines::negative_energies(&rows).unwrap();
+        for (i, (g, w)) in energy
+            .iter()
+            .zip(vector(&case["negative_energy"]))
+            .enumerate()
+        {
+            assert_close(*g, w, REL, &format!("{name}: negative energy of row {i}"));
+        }
+    }
+}

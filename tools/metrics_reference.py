@@ -17,7 +17,10 @@ Every metric is computed twice where a library offers it: by scikit-learn
 numpy transcription of the definition; the script stops if they disagree. Each of the
 three ECE bin conventions (DESIGN default, netcal, torchmetrics) is likewise computed by
 two different numpy implementations of its rule. The temperature fit is checked by a
-dense grid search over log T (no scipy optimiser).
+dense grid search over log T (no scipy optimiser). The isotonic baseline is
+scikit-learn's IsotonicRegression, checked against a plain-Python pool-adjacent-violators
+with numpy.interp; ood_auroc and ood_fpr95 are roc_auc_score and roc_curve, checked
+against direct counts; the energy score is scipy's logsumexp.
 
 JSON conventions: non-finite floats are the strings "inf" / "-inf"; undefined metrics
 are null; a background label is null.
@@ -31,11 +34,14 @@ import numpy as np
 import scipy
 import sklearn
 from scipy.stats import binned_statistic_dd
+from scipy.special import logsumexp
+from sklearn.isotonic import IsotonicRegression
 from sklearn.metrics import (
     average_precision_score,
     brier_score_loss,
     log_loss,
     roc_auc_score,
+    roc_curve,
 )
 
 OUT_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "golden", "metrics")
@@ -533,6 +539,133 @@ def temperature_cases():
     return out
 
 
+# ---------------------------------------------------------------------------
+# Known rows against unseen ones (ood_auroc, ood_fpr95), the isotonic baseline and
+# the energy score (DESIGN §1.4, §1.5).
+
+
+def separation(known, unseen):
+    """AUROC and FPR at 95 % TPR of known (positive) against unseen (negative) values,
+    by scikit-learn and by a direct count."""
+    known, unseen = np.asarray(known, float), np.asarray(unseen, float)
+    if len(known) == 0 or len(unseen) == 0:
+        return None, None
+    y = np.r_[np.ones(len(known)), np.zeros(len(unseen))]
+    v = np.r_[known, unseen]
+    auroc = float(roc_auc_score(y, v))
+    pairs = (known[:, None] > unseen[None, :]).sum() + 0.5 * (known[:, None] == unseen[None, :]).sum()
+    close(auroc, float(pairs / (len(known) * len(unseen))), what="auroc pairs")
+    fpr, tpr, _ = roc_curve(y, v, drop_intermediate=False)
+    fpr95 = float(fpr[np.argmax(tpr >= 0.95)])
+    # Directly: the smallest threshold among the known values that keeps 95 % of them.
+    for t in np.sort(np.unique(known))[::-1]:
+        if (known >= t).mean() >= 0.95:
+            direct = float((unseen >= t).mean())
+            break
+    close(fpr95, direct, what="fpr95 direct")
+    return auroc, fpr95
+
+
+def separation_cases():
+    rng = np.random.default_rng(31)
+    cases = [
+        ("by_hand", [3.0, 1.0, -1.0], [1.0, -2.0]),
+        ("twenty_known", list(range(1, 21)), [0.0, 2.0, 5.0, 1.5]),
+        ("twenty_one_known", list(range(1, 22)), [0.0, 2.0, 5.0, 1.5]),
+        ("one_known", [-3.0], [-3.0, -4.0]),
+        ("all_tied", [0.5] * 7, [0.5] * 3),
+        ("rounded_scores", list(np.round(rng.beta(5, 2, size=400), 2)),
+         list(np.round(rng.beta(2, 3, size=250), 2))),
+        ("energies", list(rng.normal(4.0, 2.0, size=300)), list(rng.normal(2.5, 1.5, size=123))),
+    ]
+    out = []
+    for name, known, unseen in cases:
+        auroc, fpr95 = separation(known, unseen)
+        out.append({"name": name, "known": known, "unseen": unseen,
+                    "expected": {"auroc": auroc, "fpr95": fpr95}})
+    return out
+
+
+def pav(x, y):
+    """Pool-adjacent-violators in plain Python on (score, 0/1) points, equal scores
+    pooled first; the fitted value at each distinct score."""
+    order = sorted(range(len(x)), key=lambda i: x[i])
+    distinct = []
+    for i in order:
+        if distinct and distinct[-1][0] == x[i]:
+            distinct[-1][1] += y[i]
+            distinct[-1][2] += 1
+        else:
+            distinct.append([x[i], y[i], 1])
+    blocks = []
+    for _, pos, n in distinct:
+        cur = [pos, n, 1]
+        while blocks and blocks[-1][0] * cur[1] > cur[0] * blocks[-1][1]:
+            p = blocks.pop()
+            cur = [p[0] + cur[0], p[1] + cur[1], p[2] + cur[2]]
+        blocks.append(cur)
+    xs = [d[0] for d in distinct]
+    ys = [b[0] / b[1] for b in blocks for _ in range(b[2])]
+    return np.array(xs), np.array(ys)
+
+
+def isotonic_scores(val_logits, val_labels, val_os, logits, os_):
+    """Per class c: sklearn's IsotonicRegression of [label = c] on OS * softmax(x)_c over
+    the validation rows, applied to OS * softmax(x)_c of the test rows (linear between
+    the fitted points, clipped outside them); checked against pav + numpy.interp."""
+    lab = np.array([-1 if l is None else l for l in val_labels])
+    sv = val_os[:, None] * softmax_rows(val_logits)
+    st = os_[:, None] * softmax_rows(logits)
+    out = np.empty_like(st)
+    for c in range(st.shape[1]):
+        target = (lab == c).astype(float)
+        ir = IsotonicRegression(increasing=True, out_of_bounds="clip").fit(sv[:, c], target)
+        out[:, c] = ir.predict(st[:, c])
+        xs, ys = pav(list(sv[:, c]), list((lab == c).astype(int)))
+        direct = np.interp(st[:, c], xs, ys)
+        for a, b in zip(out[:, c], direct):
+            close(float(a), float(b), rel=1e-12, what="isotonic pav")
+    return out
+
+
+def isotonic_cases():
+    out = []
+    for name, seed, n, scale, ties in (
+        ("detector", 41, 300, 3.0, False),
+        ("rounded_logits", 42, 200, 2.0, True),
+        ("classifier", 43, 150, 4.0, False),
+    ):
+        rng = np.random.default_rng(seed)
+        k = 3
+        def draw(m):
+            x = rng.normal(size=(m, k)) * scale
+            if ties:
+                x = np.round(x)
+            lab = [int(v) if v >= 0 else None for v in rng.integers(-1, k, size=m)]
+            if name == "classifier":
+                lab = [int(np.argmax(r + rng.normal(size=k) * scale)) for r in x]
+                os_ = np.ones(m)
+            else:
+                os_ = np.round(rng.uniform(0.2, 1.0, size=m), 3 if not ties else 1)
+            return x, lab, os_
+        vx, vl, vo = draw(n)
+        tx, _, to = draw(n // 2)
+        scores = isotonic_scores(vx, vl, vo, tx, to)
+        energy = logsumexp(tx, axis=1)
+        assert np.allclose(energy, np.log(np.exp(tx).sum(axis=1)), rtol=1e-13)
+        out.append({
+            "name": name,
+            "val_logits": vx.tolist(),
+            "val_labels": vl,
+            "val_objectness": vo.tolist(),
+            "logits": tx.tolist(),
+            "objectness": to.tolist(),
+            "isotonic": scores.tolist(),
+            "negative_energy": energy.tolist(),
+        })
+    return out
+
+
 def encode(x):
     if isinstance(x, float):
         if math.isinf(x):
@@ -577,6 +710,8 @@ def main():
     write("ood.json", ood_cases())
     write("baselines.json", baseline_cases())
     write("temperature.json", temperature_cases())
+    write("separation.json", separation_cases())
+    write("isotonic.json", isotonic_cases())
 
 
 if __name__ == "__main__":

@@ -130,9 +130,12 @@ def evaluate(
     ece_bins: int = 10,
     ece_binning: Literal["design", "default", "netcal", "torchmetrics"] = "design",
     classes: Optional[Sequence[str]] = None,
+    group_by: Optional[Sequence[Any]] = None,
 ) -> Dict[str, Any]:
     """Every metric of every method, as `mlmap eval --format json` reports them.
-    `ece_bins` outside `1 .. 2**20` raises `ValueError`."""
+    `ece_bins` outside `1 .. 2**20` raises `ValueError`. `group_by` (one value per test
+    row, taken by `str()`) adds the metrics per value under `"groups"`, as
+    `mlmap eval --group-by`."""
 
 #: The `bayes` keyword: `True` (the default head: 22 bins, lambda 1e-3), `False` or
 #: `None` (no Bayes head), or `{"bins": int, "lambda": float}`.
@@ -170,7 +173,7 @@ def tune(
     bins_bayes: Optional[Sequence[int]] = None,
     bayes: bool = True,
     lambda_min: float = 1e-8,
-    lambda_max: float = 1e-1,
+    lambda_max: float = 1.0,
     lambdas_per_decade: int = 3,
     lambda_bayes_min: Optional[float] = None,
     lambda_bayes_max: Optional[float] = None,

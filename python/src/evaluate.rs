@@ -124,13 +124,16 @@ pub fn data_set(classes: &[String], obj: &Bound<'_, PyAny>, name: &str) -> PyRes
 /// `labels` are integers: `0..K-1` a class (the table's order), `-1` background (a
 /// false positive of the detector). `val=(logits, labels[, objectness])` fits the
 /// temperature baseline; `ood=logits` or `(logits, None, objectness)` adds the
-/// never-seen objects' `ood_mean` and `ood_over_0_9`. `classes`, when given, must be
-/// the table's class names in order.
+/// never-seen objects' `ood_mean`, `ood_over_0_9`, `ood_auroc` and `ood_fpr95`.
+/// `classes`, when given, must be the table's class names in order. `group_by`, one
+/// value per test row (any objects, taken by `str()`), adds `"groups": {value:
+/// {"methods": ..., "rows": ..., "labelled": ...}}`, as `mlmap eval --group-by`.
 #[pyfunction]
 #[pyo3(signature = (table, logits, labels, objectness=None, *, val=None, ood=None,
-                    ece_bins=arrays::Count::new(10), ece_binning="design", classes=None),
+                    ece_bins=arrays::Count::new(10), ece_binning="design", classes=None,
+                    group_by=None),
     text_signature = "(table, logits, labels, objectness=None, *, val=None, ood=None, \
-                      ece_bins=10, ece_binning='design', classes=None)")]
+                      ece_bins=10, ece_binning='design', classes=None, group_by=None)")]
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate<'py>(
     py: Python<'py>,
@@ -143,6 +146,7 @@ pub fn evaluate<'py>(
     ece_bins: arrays::Count,
     ece_binning: &str,
     classes: Option<Vec<String>>,
+    group_by: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let t = &table.get().table;
     let names: Vec<String> = t.class_names().map(str::to_string).collect();
@@ -159,6 +163,30 @@ pub fn evaluate<'py>(
         .filter(|v| !v.is_none())
         .map(|v| data_set(&data_classes, v, "ood"))
         .transpose()?;
+    let groups = match group_by.filter(|g| !g.is_none()) {
+        None => None,
+        Some(g) => {
+            let mut values = Vec::with_capacity(test.len());
+            for item in g.try_iter()? {
+                let text = item?.str()?.to_string();
+                if text.is_empty() {
+                    return Err(value_error(format!(
+                        "group_by: row index {}: the group value is empty",
+                        values.len()
+                    )));
+                }
+                values.push(text);
+            }
+            if values.len() != test.len() {
+                return Err(value_error(format!(
+                    "group_by: has {} values but the logits have {} rows",
+                    values.len(),
+                    test.len()
+                )));
+            }
+            Some(values)
+        }
+    };
     let (test_path, val_path, ood_path) = (Path::new("test"), Path::new("val"), Path::new("ood"));
     let inputs = Inputs {
         table: t,
@@ -169,24 +197,39 @@ pub fn evaluate<'py>(
             bins: ece_bins,
             binning,
         },
+        groups: groups.as_deref(),
     };
     let ev = py
         .detach(|| eval::evaluate(&inputs))
         .map_err(|e| host_error(&e))?;
-    let methods = PyDict::new(py);
-    for r in &ev.methods {
-        let m = PyDict::new(py);
-        for (key, v) in ev.entries(r) {
-            m.set_item(key, v.filter(|v| v.is_finite()))?;
+    let columns = |cols: Vec<eval::Column>| -> PyResult<Bound<'py, PyDict>> {
+        let methods = PyDict::new(py);
+        for (method, entries) in cols {
+            let m = PyDict::new(py);
+            for (key, v) in entries {
+                m.set_item(key, v.filter(|v| v.is_finite()))?;
+            }
+            methods.set_item(method.name(), m)?;
         }
-        methods.set_item(r.method.name(), m)?;
-    }
+        Ok(methods)
+    };
     let out = PyDict::new(py);
-    out.set_item("methods", methods)?;
+    out.set_item("methods", columns(ev.columns())?)?;
     out.set_item("rows", ev.rows)?;
     out.set_item("ood_rows", ev.ood_rows)?;
     out.set_item("classes", ev.class_names.clone())?;
     out.set_item("ece_bins", ev.config.bins)?;
     out.set_item("ece_binning", ev.config.binning.name())?;
+    if groups.is_some() {
+        let all = PyDict::new(py);
+        for g in &ev.groups {
+            let d = PyDict::new(py);
+            d.set_item("methods", columns(ev.group_columns(g))?)?;
+            d.set_item("rows", g.rows)?;
+            d.set_item("labelled", g.labelled)?;
+            all.set_item(&g.value, d)?;
+        }
+        out.set_item("groups", all)?;
+    }
     Ok(out)
 }

@@ -638,13 +638,13 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
 #[pyfunction]
 #[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, classes=None,
                     objective="ece", bins_ml=None, bins_map=None, bins_bayes=None,
-                    bayes=true, lambda_min=1e-8, lambda_max=1e-1,
+                    bayes=true, lambda_min=1e-8, lambda_max=1.0,
                     lambdas_per_decade=Count::new(3),
                     lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
                     max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5)),
     text_signature = "(logits, labels, val, objectness=None, *, ood=None, classes=None, \
                       objective='ece', bins_ml=None, bins_map=None, bins_bayes=None, \
-                      bayes=True, lambda_min=1e-8, lambda_max=1e-1, lambdas_per_decade=3, \
+                      bayes=True, lambda_min=1e-8, lambda_max=1.0, lambdas_per_decade=3, \
                       lambda_bayes_min=None, lambda_bayes_max=None, \
                       max_accuracy_loss=0.005, max_map_loss=0.01, edges='linspace', \
                       tail='zero', top=5)")]
@@ -732,6 +732,8 @@ pub fn tune<'py>(
         ],
         lambdas,
         bayes: bayes_grid,
+        // The open head's epsilon grid, as `mlmap tune` searches it.
+        epsilons: mlmap::host::tune::epsilon_grid(),
         objective: Objective::from_name(objective).map_err(|e| value_error(e.to_string()))?,
         guards,
         edges: EdgeMode::from_name(edges).map_err(|e| value_error(e.to_string()))?,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import mlmap
-from conftest import CLASSES, DEFAULT_TABLE
+from conftest import CLASSES, DEFAULT_TABLE, ROOT
 
 
 @pytest.fixture(scope="session")
@@ -35,7 +35,10 @@ def test_equals_mlmap_eval_with_val_and_ood(table, data, cli, binning, flag):
     )
     # Every value, exactly: the JSON holds the shortest repr of each f64.
     assert got == want
-    assert list(got["methods"]) == ["sigmoid", "softmax", "temperature", "ml", "map", "bayes"]
+    assert list(got["methods"])[:8] == [
+        "sigmoid", "softmax", "temperature", "isotonic", "energy", "ml", "map", "bayes"]
+    assert got["methods"]["energy"]["ece"] is None
+    assert 0.0 <= got["methods"]["isotonic"]["ood_fpr95"] <= 1.0
 
 
 def test_equals_mlmap_eval_on_test_alone(table, data, cli):
@@ -46,6 +49,31 @@ def test_equals_mlmap_eval_on_test_alone(table, data, cli):
                          test.objectness, classes=CLASSES)
     assert got == want
     assert "temperature" not in got["methods"] and got["ood_rows"] is None
+
+
+def test_group_by_equals_mlmap_eval_group_by(table, data, cli, tmp_path):
+    # test.csv with a column `bucket` (id % 3) after the label: not a class.
+    lines = (ROOT / "examples" / "data" / "test.csv").read_text().splitlines()
+    out, buckets = [], []
+    for i, line in enumerate(lines):
+        ident, label, rest = line.split(",", 2)
+        bucket = "bucket" if i == 0 else str(int(ident) % 3)
+        out.append(f"{ident},{label},{bucket},{rest}")
+        if i:
+            buckets.append(int(bucket))
+    path = tmp_path / "grouped.csv"
+    path.write_text("\n".join(out) + "\n")
+    want = eval_json(cli, "--test", str(path), "--ood", "examples/data/ood.csv",
+                     "--group-by", "bucket")
+    test, ood = data["test"], data["ood"]
+    got = mlmap.evaluate(table, test.logits, test.labels, test.objectness,
+                         ood=(ood.logits, None, ood.objectness), group_by=buckets)
+    assert want.pop("group_by") == "bucket"
+    assert got == want
+    assert list(got["groups"]) == ["0", "1", "2"]
+    assert sum(g["rows"] for g in got["groups"].values()) == got["rows"]
+    with pytest.raises(ValueError, match="^group_by: has 2 values but the logits have"):
+        mlmap.evaluate(table, test.logits, test.labels, group_by=[0, 1])
 
 
 def test_undefined_metrics_are_none(table):

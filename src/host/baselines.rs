@@ -1,6 +1,7 @@
 //! The prediction layers mlmap is compared with, in `f64` on the host (DESIGN §1.4):
-//! Sigmoid, Softmax and temperature-scaled Softmax, each multiplied by the objectness,
-//! and the fit of the temperature on validation data.
+//! Sigmoid, Softmax, temperature-scaled Softmax and per-class isotonic regression, each
+//! multiplied by the objectness, the fits of the temperature and of the isotonic maps
+//! on validation data, and the energy score that ranks unknown objects.
 //!
 //! The per-row functions ([`sigmoid`], [`softmax`], [`temperature`]) write the `K`
 //! scores of one detection into a slice the caller owns. [`score_rows`] scores a whole
@@ -13,6 +14,12 @@ use core::fmt;
 use std::vec::Vec;
 
 use crate::InferError;
+
+mod isotonic;
+
+pub use self::isotonic::{
+    fit_isotonic, negative_energies, negative_energy, score_isotonic, Isotonic, IsotonicMap,
+};
 
 /// Probability floor of the negative log-likelihood, `-ln(max(s_label, NLL_FLOOR))`
 /// (DESIGN §1.5); shared with [`metrics`](super::metrics).
@@ -131,6 +138,8 @@ pub enum BaselineError {
     Temperature,
     /// The validation set has no row labelled with a class, so no `T` can be fitted.
     NoLabelledRows,
+    /// The validation set has no rows, so no isotonic map can be fitted.
+    NoRows,
 }
 
 impl fmt::Display for BaselineError {
@@ -145,6 +154,7 @@ impl fmt::Display for BaselineError {
             Self::NoLabelledRows => {
                 f.write_str("no row is labelled with a class: cannot fit a temperature")
             }
+            Self::NoRows => f.write_str("no rows: cannot fit the isotonic maps"),
         }
     }
 }

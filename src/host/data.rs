@@ -102,7 +102,50 @@ impl Loaded {
     ///
     /// [`HostError`] naming the file (and line): a malformed file, or no rows.
     pub fn read(path: &Path) -> Result<Self, HostError> {
-        let src = open(path)?;
+        Self::read_from(&open(path)?, path, "").map(|(d, _)| d)
+    }
+
+    /// Reads every row of `path` with `column` declared not a class (DESIGN §4,
+    /// `eval --group-by`), and the column's text of every row: `None` when the file
+    /// does not have the column and `required` is false.
+    ///
+    /// # Errors
+    ///
+    /// As [`read`](Self::read); also, naming the file, when `required` and the file has
+    /// no such column (an NPY directory has none), and naming the line when a row's
+    /// value is empty.
+    pub fn read_with_column(
+        path: &Path,
+        column: &str,
+        required: bool,
+    ) -> Result<(Self, Option<Vec<String>>), HostError> {
+        let src = DataSource::open_with_column(path, column)?;
+        if !src.has_column() {
+            if !required {
+                return Self::read_from(&src, path, column).map(|(d, _)| (d, None));
+            }
+            let why = if path.is_dir() {
+                "is an NPY directory, which has no column to group by: give a CSV file"
+            } else {
+                "has no such column"
+            };
+            return Err(HostError::Input(std::format!(
+                "{}: column {:?} (--group-by): {why}",
+                path.display(),
+                echo(column)
+            )));
+        }
+        let (d, values) = Self::read_from(&src, path, column)?;
+        Ok((d, Some(values)))
+    }
+
+    /// Every row of `src` (read from `path`), with the text of its declared column
+    /// `column` (empty without one).
+    fn read_from(
+        src: &DataSource,
+        path: &Path,
+        column: &str,
+    ) -> Result<(Self, Vec<String>), HostError> {
         let mut d = Self {
             classes: src.classes().to_vec(),
             labels: Vec::new(),
@@ -112,7 +155,18 @@ impl Loaded {
             has_labels: src.has_labels(),
             first_missing_label: None,
         };
-        src.for_each_row(|row| -> Result<(), HostError> {
+        let mut values = Vec::new();
+        src.for_each_row_with_column(|row, value| -> Result<(), HostError> {
+            if let Some(v) = value {
+                if v.is_empty() {
+                    return Err(HostError::Input(std::format!(
+                        "{}: column {:?}: the group value is empty; every row needs one",
+                        at(path, row.location()),
+                        echo(column)
+                    )));
+                }
+                values.push(v.to_string());
+            }
             if row.label == Label::Missing && d.first_missing_label.is_none() {
                 d.first_missing_label = Some(row.location());
             }
@@ -125,7 +179,7 @@ impl Loaded {
         if d.labels.is_empty() {
             return Err(HostError::input(path, "holds no data rows"));
         }
-        Ok(d)
+        Ok((d, values))
     }
 
     /// Number of rows.

@@ -194,7 +194,19 @@ impl DataSource {
     /// A [`DataError`] when the path does not exist or cannot be read, or when a header
     /// breaks a rule of DESIGN §2 (see the [module docs](self)).
     pub fn open(path: &Path) -> Result<Self, DataError> {
-        Self::open_with(path, false)
+        Self::open_with(path, false, None)
+    }
+
+    /// As [`DataSource::open`], with `column` declared not a class: a CSV column of
+    /// that name is neither a logit nor a class, and
+    /// [`for_each_row_with_column`](Self::for_each_row_with_column) gives its text
+    /// (`eval --group-by`, DESIGN §4). An NPY directory has no such column.
+    ///
+    /// # Errors
+    ///
+    /// As [`DataSource::open`].
+    pub fn open_with_column(path: &Path, column: &str) -> Result<Self, DataError> {
+        Self::open_with(path, false, Some(column))
     }
 
     /// As [`DataSource::open`], for quantized logits (`mlmap apply --quantized`): an
@@ -206,10 +218,10 @@ impl DataSource {
     ///
     /// As [`DataSource::open`].
     pub fn open_codes(path: &Path) -> Result<Self, DataError> {
-        Self::open_with(path, true)
+        Self::open_with(path, true, None)
     }
 
-    fn open_with(path: &Path, codes: bool) -> Result<Self, DataError> {
+    fn open_with(path: &Path, codes: bool, column: Option<&str>) -> Result<Self, DataError> {
         let (classes, format) = if path.is_dir() {
             let (classes, schema) = npy_dir::Schema::open_with(path, codes)?;
             (classes, Format::Npy(schema))
@@ -219,7 +231,7 @@ impl DataSource {
         {
             return Err(DataError::new(path, DataErrorKind::NpyFileNotDirectory));
         } else {
-            let (classes, schema) = csv_file::Schema::open(path)?;
+            let (classes, schema) = csv_file::Schema::open(path, column)?;
             (classes, Format::Csv(schema))
         };
         Ok(Self {
@@ -251,6 +263,15 @@ impl DataSource {
     pub fn has_ids(&self) -> bool {
         match &self.format {
             Format::Csv(s) => s.has_ids(),
+            Format::Npy(_) => false,
+        }
+    }
+
+    /// `true` when the file has the column declared by
+    /// [`DataSource::open_with_column`].
+    pub fn has_column(&self) -> bool {
+        match &self.format {
+            Format::Csv(s) => s.has_extra(),
             Format::Npy(_) => false,
         }
     }
@@ -300,6 +321,26 @@ impl DataSource {
         match &self.format {
             Format::Csv(s) => s.for_each_row(&self.path, &self.classes, f),
             Format::Npy(s) => s.for_each_row(&self.classes, f),
+        }
+    }
+}
+
+impl DataSource {
+    /// As [`DataSource::for_each_row`], with the text of the column declared by
+    /// [`DataSource::open_with_column`] (trimmed; `None` when the file does not have
+    /// it).
+    ///
+    /// # Errors
+    ///
+    /// As [`DataSource::for_each_row`].
+    pub fn for_each_row_with_column<E, F>(&self, mut f: F) -> Result<(), E>
+    where
+        E: From<DataError>,
+        F: FnMut(Row<'_>, Option<&str>) -> Result<(), E>,
+    {
+        match &self.format {
+            Format::Csv(s) => s.for_each_row_with_column(&self.path, &self.classes, f),
+            Format::Npy(s) => s.for_each_row(&self.classes, |row| f(row, None)),
         }
     }
 }

@@ -9,7 +9,7 @@ use std::path::Path;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use super::baselines::{self, Baseline, Rows};
+use super::baselines::{self, Baseline, Isotonic, Rows};
 use super::data::{at, check_classes, Loaded};
 use super::error::HostError;
 use super::metrics::{self, Metrics, MetricsConfig};
@@ -19,7 +19,7 @@ use super::DynTable;
 use crate::Head;
 
 /// A way of turning logits into scores, compared by `eval`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Method {
     /// `OS * sigma(x_i)`.
     Sigmoid,
@@ -27,6 +27,11 @@ pub enum Method {
     Softmax,
     /// `OS * softmax(x / T)_i`, `T` fitted on validation data.
     Temperature,
+    /// `g_i(OS * softmax(x)_i)`, per-class isotonic maps fitted on validation data.
+    Isotonic,
+    /// The energy score `-logsumexp(x)`: a ranking of unknown objects, not a
+    /// probability, so only its ranking metrics are reported.
+    Energy,
     /// The layer's ML head.
     Ml,
     /// The layer's MAP head.
@@ -55,6 +60,16 @@ impl Named for Method {
             "temperature",
             "OS times the softmax of the logits over a fitted temperature",
         ),
+        Name::new(
+            Self::Isotonic,
+            "isotonic",
+            "Per-class isotonic maps of the softmax scores, fitted on validation rows",
+        ),
+        Name::new(
+            Self::Energy,
+            "energy",
+            "The energy score, a ranking of unknown objects (ranking metrics only)",
+        ),
         Name::new(Self::Ml, "ml", "The layer's ML head"),
         Name::new(Self::Map, "map", "The layer's MAP head"),
         Name::new(Self::Bayes, "bayes", "The layer's Bayes head"),
@@ -64,10 +79,12 @@ impl Named for Method {
 
 impl Method {
     /// Every method, in report order.
-    pub const ALL: [Self; 7] = [
+    pub const ALL: [Self; 9] = [
         Self::Sigmoid,
         Self::Softmax,
         Self::Temperature,
+        Self::Isotonic,
+        Self::Energy,
         Self::Ml,
         Self::Map,
         Self::Bayes,
@@ -77,12 +94,20 @@ impl Method {
     /// The layer head behind the method, if it is one.
     pub fn head(self) -> Option<Head> {
         match self {
-            Self::Sigmoid | Self::Softmax | Self::Temperature => None,
+            Self::Sigmoid | Self::Softmax | Self::Temperature | Self::Isotonic | Self::Energy => {
+                None
+            }
             Self::Ml => Some(Head::Ml),
             Self::Map => Some(Head::Map),
             Self::Bayes => Some(Head::Bayes),
             Self::Open => Some(Head::Open),
         }
+    }
+
+    /// Whether the method's values are a ranking, not probabilities (the energy
+    /// score): only `auroc`, `ood_auroc` and `ood_fpr95` are defined for it.
+    pub fn ranks_only(self) -> bool {
+        self == Self::Energy
     }
 
     /// The name in prose: the baselines' names, the heads' titles (`ML`, `MAP`,
@@ -137,12 +162,19 @@ fn baseline(b: Baseline, d: &Loaded, k: usize, path: &Path) -> Result<Vec<f64>, 
     baselines::score_rows(b, &rows).map_err(|e| HostError::input(path, e))
 }
 
-/// The scores of `method` on `data`; `None` for the temperature baseline without a
-/// fitted temperature and for the Bayes or open head of a table without one.
+/// What [`evaluate`] fitted on the validation rows.
+struct Fitted {
+    temperature: Option<f64>,
+    isotonic: Option<Isotonic>,
+}
+
+/// The scores of `method` on `data`; `None` for the baselines fitted on validation
+/// rows without such rows, for the energy score (not a score in `[0, 1]`: see
+/// [`EnergyResult`]), and for the Bayes or open head of a table without one.
 fn method_scores(
     method: Method,
     table: &DynTable,
-    temperature: Option<f64>,
+    fitted: &Fitted,
     data: &Loaded,
     path: &Path,
 ) -> Result<Option<Vec<f64>>, HostError> {
@@ -150,10 +182,21 @@ fn method_scores(
     let b = match method {
         Method::Sigmoid => Baseline::Sigmoid,
         Method::Softmax => Baseline::Softmax,
-        Method::Temperature => match temperature {
+        Method::Temperature => match fitted.temperature {
             Some(t) => Baseline::Temperature(t),
             None => return Ok(None),
         },
+        Method::Isotonic => {
+            let Some(iso) = &fitted.isotonic else {
+                return Ok(None);
+            };
+            let rows = Rows::new(&data.logits, k, &[], &data.objectness)
+                .map_err(|e| HostError::input(path, e))?;
+            return baselines::score_isotonic(iso, &rows)
+                .map(Some)
+                .map_err(|e| HostError::input(path, e));
+        }
+        Method::Energy => return Ok(None),
         Method::Ml => return head_scores(table, Head::Ml, data, path).map(Some),
         Method::Map => return head_scores(table, Head::Map, data, path).map(Some),
         Method::Bayes if table.bayes().is_none() => return Ok(None),
@@ -164,8 +207,13 @@ fn method_scores(
     baseline(b, data, k, path).map(Some)
 }
 
+/// The most distinct values `eval --group-by` accepts (DESIGN §4): more are refused,
+/// as a column that is not a grouping (an identifier, a continuous value).
+pub const MAX_GROUPS: usize = 1000;
+
 /// The inputs of [`evaluate`]: a table, a labelled test set, and optionally a
-/// labelled validation set (fits the temperature) and an out-of-distribution set.
+/// labelled validation set (fits the temperature and the isotonic maps), an
+/// out-of-distribution set and a group value per test row.
 #[derive(Debug, Clone, Copy)]
 pub struct Inputs<'a> {
     /// The table.
@@ -178,6 +226,9 @@ pub struct Inputs<'a> {
     pub ood: Option<(&'a Loaded, &'a Path)>,
     /// ECE bins and binning.
     pub config: MetricsConfig,
+    /// The group of each test row (`eval --group-by`), one per row: every metric is
+    /// also computed per distinct value.
+    pub groups: Option<&'a [String]>,
 }
 
 /// One method's scores and metrics.
@@ -193,6 +244,32 @@ pub struct MethodResult {
     pub metrics: Metrics,
 }
 
+/// The ranking metrics of a method whose values are not probabilities (the energy
+/// score, DESIGN §1.5); `None` when undefined.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Ranking {
+    /// `auroc`: true positives (the decision of the largest logit is the label)
+    /// against false positives.
+    pub auroc: Option<f64>,
+    /// `ood_auroc`: known test rows against out-of-distribution rows.
+    pub ood_auroc: Option<f64>,
+    /// `ood_fpr95`: the share of out-of-distribution rows at or above the value that
+    /// keeps 95 % of the known test rows.
+    pub ood_fpr95: Option<f64>,
+}
+
+/// The energy score of every row and its ranking metrics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EnergyResult {
+    /// The negative energy `logsumexp(x)` of each test row (larger: more like a known
+    /// object).
+    pub test: Vec<f64>,
+    /// The negative energy of each out-of-distribution row.
+    pub ood: Option<Vec<f64>>,
+    /// Its ranking metrics.
+    pub ranking: Ranking,
+}
+
 /// A fitted temperature.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Temperature {
@@ -200,6 +277,22 @@ pub struct Temperature {
     pub t: f64,
     /// The validation NLL at `T`.
     pub nll: f64,
+}
+
+/// Every metric of the test rows of one group value (`eval --group-by`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupResult {
+    /// The group's value, as written in the data file.
+    pub value: String,
+    /// Number of test rows in the group.
+    pub rows: usize,
+    /// Number of them labelled with a class.
+    pub labelled: usize,
+    /// Each method's metrics on the group's rows (the out-of-distribution metrics
+    /// against every out-of-distribution row), in [`Evaluation::methods`] order.
+    pub methods: Vec<(Method, Metrics)>,
+    /// The energy score's ranking metrics on the group's rows.
+    pub energy: Ranking,
 }
 
 /// Everything [`evaluate`] computes.
@@ -213,18 +306,29 @@ pub struct Evaluation {
     pub logits: Vec<f64>,
     /// The out-of-distribution logits, with such a set.
     pub ood_logits: Option<Vec<f64>>,
-    /// Every method evaluated, in [`Method::ALL`] order (temperature only with a
-    /// validation set, Bayes only when the table has that head).
+    /// Every method with scores in `[0, 1]` evaluated, in [`Method::ALL`] order
+    /// (temperature and isotonic only with a validation set, Bayes and open only when
+    /// the table has that head).
     pub methods: Vec<MethodResult>,
+    /// The energy score.
+    pub energy: EnergyResult,
     /// The fitted temperature, with a validation set.
     pub temperature: Option<Temperature>,
+    /// The fitted isotonic maps, with a validation set.
+    pub isotonic: Option<Isotonic>,
     /// Number of test rows.
     pub rows: usize,
     /// Number of out-of-distribution rows.
     pub ood_rows: Option<usize>,
     /// ECE bins and binning.
     pub config: MetricsConfig,
+    /// The metrics per group value, with groups: in the order of the values, as
+    /// numbers when every value is one, else as text.
+    pub groups: Vec<GroupResult>,
 }
+
+/// One column of a report: a method and its `(key, value)` pairs, in report order.
+pub type Column = (Method, Vec<(String, Option<f64>)>);
 
 impl Evaluation {
     /// Number of test rows labelled with a class.
@@ -235,11 +339,70 @@ impl Evaluation {
     /// The metrics of `r` as `(key, value)`, in report order: [`Metrics::entries`],
     /// then `T` for the temperature baseline.
     pub fn entries(&self, r: &MethodResult) -> Vec<(String, Option<f64>)> {
-        let mut entries = r.metrics.entries(&self.class_names);
-        if let (Method::Temperature, Some(t)) = (r.method, self.temperature) {
+        self.entries_of(r.method, &r.metrics)
+    }
+
+    fn entries_of(&self, method: Method, m: &Metrics) -> Vec<(String, Option<f64>)> {
+        let mut entries = m.entries(&self.class_names);
+        if let (Method::Temperature, Some(t)) = (method, self.temperature) {
             entries.push(("T".into(), Some(t.t)));
         }
         entries
+    }
+
+    /// The columns of a report from the methods' metrics and the energy score's
+    /// ranking, in [`Method::ALL`] order: the energy score has every key of the others
+    /// (except `T`), `null` but for `auroc`, `ood_auroc` and `ood_fpr95`.
+    fn columns_of(&self, methods: &[(Method, &Metrics)], energy: &Ranking) -> Vec<Column> {
+        let mut out: Vec<Column> = Vec::with_capacity(methods.len() + 1);
+        for &(method, m) in methods {
+            if method > Method::Energy && !out.iter().any(|c| c.0 == Method::Energy) {
+                out.push((Method::Energy, Vec::new()));
+            }
+            out.push((method, self.entries_of(method, m)));
+        }
+        if !out.iter().any(|c| c.0 == Method::Energy) {
+            out.push((Method::Energy, Vec::new()));
+        }
+        let keys: Vec<String> = methods
+            .first()
+            .map(|(_, m)| m.entries(&self.class_names))
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(k, _)| k)
+            .collect();
+        if let Some(col) = out.iter_mut().find(|c| c.0 == Method::Energy) {
+            col.1 = keys
+                .into_iter()
+                .map(|key| {
+                    let v = match key.as_str() {
+                        "auroc" => energy.auroc,
+                        "ood_auroc" => energy.ood_auroc,
+                        "ood_fpr95" => energy.ood_fpr95,
+                        _ => None,
+                    };
+                    (key, v)
+                })
+                .collect();
+        }
+        out
+    }
+
+    /// Every method's `(key, value)` pairs on the whole test set, in [`Method::ALL`]
+    /// order, the energy score included.
+    pub fn columns(&self) -> Vec<Column> {
+        let methods: Vec<(Method, &Metrics)> = self
+            .methods
+            .iter()
+            .map(|r| (r.method, &r.metrics))
+            .collect();
+        self.columns_of(&methods, &self.energy.ranking)
+    }
+
+    /// As [`columns`](Self::columns), on the rows of one group.
+    pub fn group_columns(&self, g: &GroupResult) -> Vec<Column> {
+        let methods: Vec<(Method, &Metrics)> = g.methods.iter().map(|(m, x)| (*m, x)).collect();
+        self.columns_of(&methods, &g.energy)
     }
 
     /// Every metric of `r` on the test rows and the out-of-distribution rows together,
@@ -298,14 +461,99 @@ impl Evaluation {
         Ok(best.map(|(method, m, _)| (method, m)))
     }
 
-    /// The value of metric `key` of `method`; `None` when undefined or absent.
+    /// The value of metric `key` of `method` on the whole test set; `None` when
+    /// undefined or absent.
     pub fn value(&self, method: Method, key: &str) -> Option<f64> {
-        let r = self.methods.iter().find(|r| r.method == method)?;
-        self.entries(r)
+        self.columns()
+            .into_iter()
+            .find(|c| c.0 == method)?
+            .1
             .into_iter()
             .find(|(k, _)| k == key)
             .and_then(|(_, v)| v)
     }
+}
+
+/// The rows `idx` of an `N x k` matrix.
+fn pick(values: &[f64], k: usize, idx: &[usize]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(idx.len() * k);
+    for &i in idx {
+        if let Some(row) = values.get(i * k..(i + 1) * k) {
+            out.extend_from_slice(row);
+        }
+    }
+    out
+}
+
+/// The metrics of one method on a set of rows, with the out-of-distribution ones
+/// (the known rows of the set against every unseen row) when there are unseen rows.
+fn set_metrics(
+    scores: &[f64],
+    logits: &[f64],
+    labels: &[Option<usize>],
+    ood: Option<&[f64]>,
+    k: usize,
+    config: &MetricsConfig,
+) -> Result<Metrics, metrics::MetricsError> {
+    let m = metrics::evaluate_with_logits(scores, logits, k, labels, config)?;
+    match ood {
+        Some(o) => {
+            let known = metrics::known_confidences(scores, k, labels);
+            Ok(m.with_ood(metrics::ood_metrics_against(o, k, &known)?))
+        }
+        None => Ok(m),
+    }
+}
+
+/// The energy score's ranking metrics on a set of rows: `correct[i]` whether row `i`'s
+/// decision (the largest logit) is its label.
+fn energy_ranking(
+    energy: &[f64],
+    correct: &[bool],
+    labels: &[Option<usize>],
+    ood: Option<&[f64]>,
+) -> Ranking {
+    let split = |keep: &dyn Fn(usize) -> bool| -> Vec<f64> {
+        energy
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| keep(i))
+            .map(|(_, &e)| e)
+            .collect()
+    };
+    let tp = split(&|i| correct.get(i).copied().unwrap_or(false));
+    let fp = split(&|i| !correct.get(i).copied().unwrap_or(false));
+    let known = split(&|i| labels.get(i).is_some_and(Option::is_some));
+    Ranking {
+        auroc: metrics::separation_auroc(&tp, &fp),
+        ood_auroc: ood.and_then(|o| metrics::separation_auroc(&known, o)),
+        ood_fpr95: ood.and_then(|o| metrics::fpr_at_95_tpr(&known, o)),
+    }
+}
+
+/// The distinct values of `groups` and the rows of each, in the order DESIGN §4 gives:
+/// as numbers when every value is a finite number, else as text (byte order).
+fn group_rows(groups: &[String]) -> Vec<(String, Vec<usize>)> {
+    let mut map: std::collections::BTreeMap<&str, Vec<usize>> = std::collections::BTreeMap::new();
+    for (i, g) in groups.iter().enumerate() {
+        map.entry(g.as_str()).or_default().push(i);
+    }
+    let mut out: Vec<(String, Vec<usize>)> =
+        map.into_iter().map(|(g, v)| (g.to_string(), v)).collect();
+    let numbers: Option<Vec<f64>> = out
+        .iter()
+        .map(|(g, _)| g.parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect();
+    if numbers.is_some() {
+        out.sort_by(|a, b| {
+            let (x, y) = (a.0.parse::<f64>(), b.0.parse::<f64>());
+            match (x, y) {
+                (Ok(x), Ok(y)) => x.total_cmp(&y).then_with(|| a.0.cmp(&b.0)),
+                _ => a.0.cmp(&b.0),
+            }
+        });
+    }
+    out
 }
 
 /// Scores every method and computes every metric.
@@ -314,7 +562,8 @@ impl Evaluation {
 ///
 /// [`HostError::Input`] naming the file at fault: classes that differ from the
 /// table's, missing labels, a validation set the temperature cannot be fitted on, or
-/// rows a method refuses.
+/// rows a method refuses; groups that are not one per test row, or more than
+/// [`MAX_GROUPS`] of them.
 pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
     let table = inp.table;
     let k = table.k();
@@ -322,6 +571,10 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
     let names: Vec<String> = table.class_names().map(str::to_string).collect();
     check_classes(test_path, &test.classes, table.class_names())?;
     let labels = test.class_labels(test_path)?;
+    let mut fitted = Fitted {
+        temperature: None,
+        isotonic: None,
+    };
     let mut temperature = None;
     if let Some((val, path)) = inp.val {
         check_classes(path, &val.classes, table.class_names())?;
@@ -334,33 +587,116 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
             t: fit.t,
             nll: fit.nll,
         });
+        fitted.temperature = Some(fit.t);
+        fitted.isotonic =
+            Some(baselines::fit_isotonic(&rows).map_err(|e| HostError::input(path, e))?);
     }
     if let Some((ood, path)) = inp.ood {
         check_classes(path, &ood.classes, table.class_names())?;
     }
-    let t = temperature.map(|t| t.t);
+    let groups = match inp.groups {
+        Some(g) if g.len() != test.len() => {
+            return Err(HostError::input(
+                test_path,
+                std::format!("{} group values for {} rows", g.len(), test.len()),
+            ))
+        }
+        Some(g) => {
+            let rows = group_rows(g);
+            if rows.len() > MAX_GROUPS {
+                return Err(HostError::input(
+                    test_path,
+                    std::format!(
+                        "the group column holds {} distinct values; at most {MAX_GROUPS} \
+                         groups are reported",
+                        rows.len()
+                    ),
+                ));
+            }
+            rows
+        }
+        None => Vec::new(),
+    };
     let mut methods = Vec::new();
     for method in Method::ALL {
-        let Some(scores) = method_scores(method, table, t, test, test_path)? else {
+        let Some(scores) = method_scores(method, table, &fitted, test, test_path)? else {
             continue;
         };
         let ood = match inp.ood {
-            Some((d, p)) => method_scores(method, table, t, d, p)?,
+            Some((d, p)) => method_scores(method, table, &fitted, d, p)?,
             None => None,
         };
-        let mut m = metrics::evaluate_with_logits(&scores, &test.logits, k, &labels, &inp.config)
-            .map_err(|e| HostError::input(test_path, std::format!("{method}: {e}")))?;
-        if let (Some(o), Some((_, path))) = (&ood, inp.ood) {
-            m = m.with_ood(
-                metrics::ood_metrics(o, k)
-                    .map_err(|e| HostError::input(path, std::format!("{method}: {e}")))?,
-            );
-        }
+        let m = set_metrics(
+            &scores,
+            &test.logits,
+            &labels,
+            ood.as_deref(),
+            k,
+            &inp.config,
+        )
+        .map_err(|e| HostError::input(test_path, std::format!("{method}: {e}")))?;
         methods.push(MethodResult {
             method,
             test: scores,
             ood,
             metrics: m,
+        });
+    }
+    // The energy score: ranked by its negative, split as softmax decides.
+    let energy_of = |d: &Loaded, path: &Path| {
+        let rows = Rows::new(&d.logits, k, &[], &[]).map_err(|e| HostError::input(path, e))?;
+        baselines::negative_energies(&rows).map_err(|e| HostError::input(path, e))
+    };
+    let energy_test = energy_of(test, test_path)?;
+    let energy_ood = inp.ood.map(|(d, p)| energy_of(d, p)).transpose()?;
+    let softmax = methods
+        .iter()
+        .find(|r| r.method == Method::Softmax)
+        .map(|r| r.test.as_slice())
+        .unwrap_or_default();
+    let correct: Vec<bool> = metrics::outcomes_with_logits(softmax, &test.logits, k, &labels)
+        .map_err(|e| HostError::input(test_path, e))?
+        .iter()
+        .map(|o| o.correct)
+        .collect();
+    let energy = EnergyResult {
+        ranking: energy_ranking(&energy_test, &correct, &labels, energy_ood.as_deref()),
+        test: energy_test,
+        ood: energy_ood,
+    };
+    let mut group_results = Vec::with_capacity(groups.len());
+    for (value, idx) in groups {
+        let g_labels: Vec<Option<usize>> = idx
+            .iter()
+            .map(|&i| labels.get(i).copied().flatten())
+            .collect();
+        let g_logits = pick(&test.logits, k, &idx);
+        let mut g_methods = Vec::with_capacity(methods.len());
+        for r in &methods {
+            let m = set_metrics(
+                &pick(&r.test, k, &idx),
+                &g_logits,
+                &g_labels,
+                r.ood.as_deref(),
+                k,
+                &inp.config,
+            )
+            .map_err(|e| {
+                HostError::input(test_path, std::format!("{}, group {value}: {e}", r.method))
+            })?;
+            g_methods.push((r.method, m));
+        }
+        let g_energy = pick(&energy.test, 1, &idx);
+        let g_correct: Vec<bool> = idx
+            .iter()
+            .map(|&i| correct.get(i).copied().unwrap_or(false))
+            .collect();
+        group_results.push(GroupResult {
+            labelled: g_labels.iter().flatten().count(),
+            rows: idx.len(),
+            energy: energy_ranking(&g_energy, &g_correct, &g_labels, energy.ood.as_deref()),
+            methods: g_methods,
+            value,
         });
     }
     Ok(Evaluation {
@@ -369,10 +705,13 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
         logits: test.logits.clone(),
         ood_logits: inp.ood.map(|(d, _)| d.logits.clone()),
         methods,
+        energy,
         temperature,
+        isotonic: fitted.isotonic,
         rows: test.len(),
         ood_rows: inp.ood.map(|(d, _)| d.len()),
         config: inp.config,
+        groups: group_results,
     })
 }
 
@@ -389,6 +728,8 @@ mod tests {
                 "sigmoid",
                 "softmax",
                 "temperature",
+                "isotonic",
+                "energy",
                 "ml",
                 "map",
                 "bayes",
@@ -402,6 +743,8 @@ mod tests {
                 "sigmoid",
                 "softmax",
                 "temperature",
+                "isotonic",
+                "energy",
                 "ML",
                 "MAP",
                 "Bayes",
@@ -411,5 +754,20 @@ mod tests {
         assert_eq!("map".parse(), Ok(Method::Map));
         assert_eq!("bayes".parse(), Ok(Method::Bayes));
         assert!("softmax2".parse::<Method>().is_err());
+        assert!(Method::Energy.ranks_only() && !Method::Isotonic.ranks_only());
+    }
+
+    #[test]
+    fn groups_sort_as_numbers_or_as_text() {
+        let g = |v: &[&str]| -> Vec<(String, Vec<usize>)> {
+            group_rows(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+        };
+        let got = g(&["10", "9", "10", "-1.5"]);
+        let order: Vec<&str> = got.iter().map(|x| x.0.as_str()).collect();
+        assert_eq!(order, ["-1.5", "9", "10"]);
+        assert_eq!(got[2].1, [0, 2]);
+        let got = g(&["moderate", "easy", "10", "hard"]);
+        let order: Vec<&str> = got.iter().map(|x| x.0.as_str()).collect();
+        assert_eq!(order, ["10", "easy", "hard", "moderate"]);
     }
 }

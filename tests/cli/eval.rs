@@ -47,7 +47,7 @@ fn eval_json_keys_and_metrics(table_path: &str) {
     let methods_json = &v["methods"];
     assert_eq!(keys(methods_json), sorted(&methods(true, &table)));
     let mut with_ood: Vec<&str> = METRIC_KEYS.to_vec();
-    with_ood.extend(["ood_mean", "ood_over_0_9"]);
+    with_ood.extend(["ood_mean", "ood_over_0_9", "ood_auroc", "ood_fpr95"]);
     for (name, m) in methods_json.as_object().unwrap() {
         let mut want = with_ood.clone();
         if name == "temperature" {
@@ -55,6 +55,11 @@ fn eval_json_keys_and_metrics(table_path: &str) {
         }
         assert_eq!(keys(m), sorted(&want), "{name}");
         for (key, value) in m.as_object().unwrap() {
+            // The energy score is a ranking: its calibration metrics are null.
+            if name == "energy" && !["auroc", "ood_auroc", "ood_fpr95"].contains(&key.as_str()) {
+                assert!(value.is_null(), "energy.{key}: {value}");
+                continue;
+            }
             let x = value
                 .as_f64()
                 .unwrap_or_else(|| panic!("{name}.{key}: {value}"));
@@ -130,7 +135,9 @@ fn eval_text_markdown_and_plots() {
         .stdout
         .ends_with(&format!("\nwrote {} plots into plots\n", plots.len())));
     for method in methods(true, &table) {
-        assert!(d.join(format!("plots/reliability_{method}.svg")).is_file());
+        let plot = d.join(format!("plots/reliability_{method}.svg"));
+        // The energy score is not a probability: no reliability diagram.
+        assert_eq!(plot.is_file(), method != "energy", "{method}");
     }
     for p in &plots {
         assert_eq!(p.extension(), Some(OsStr::new("svg")), "{}", p.display());
@@ -167,4 +174,137 @@ fn eval_text_markdown_and_plots() {
     );
     assert_eq!(v["ece_bins"], 15);
     assert_eq!(v["ece_binning"], "torchmetrics");
+}
+
+/// `test.csv` with a column `bucket` inserted after `label`: `id % 3` as `0`, `1`, `10`
+/// (numbers, so `10` sorts last), and the same file for the validation rows.
+fn with_bucket(src: &str, dst: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut out = String::new();
+    let mut buckets = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let (id, rest) = line.split_once(',').unwrap();
+        let (label, rest) = rest.split_once(',').unwrap();
+        let bucket = if i == 0 {
+            "bucket".to_string()
+        } else {
+            ["0", "1", "10"][id.parse::<usize>().unwrap() % 3].to_string()
+        };
+        out.push_str(&format!("{id},{label},{bucket},{rest}\n"));
+        if i > 0 {
+            buckets.push(bucket);
+        }
+    }
+    std::fs::write(dst, out).unwrap();
+    buckets
+}
+
+#[test]
+fn eval_group_by_reports_every_metric_per_group() {
+    let dir = tempdir();
+    let d = dir.path();
+    let table_path = golden_table();
+    let table = read_table(Path::new(&table_path));
+    let test = d.join("test.csv");
+    let buckets = with_bucket(&data("test"), &test);
+    with_bucket(&data("val"), &d.join("val.csv"));
+    let ood = data("ood");
+    let args = |format: &'static str| {
+        let mut a = eval_args(
+            &table_path,
+            "test.csv",
+            &["--val", "val.csv", "--ood", &ood, "--group-by", "bucket"],
+        );
+        a.extend(["--format", format]);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let v = ok_json(d, &args("json"));
+    assert_eq!(v["group_by"], "bucket");
+    let groups = v["groups"].as_object().unwrap();
+    assert_eq!(keys(&v["groups"]), ["0", "1", "10"]);
+    // The whole set is as without --group-by (the column is not a class).
+    let plain = ok_json(
+        d,
+        &eval_args(
+            &table_path,
+            &data("test"),
+            &["--val", &data("val"), "--ood", &ood, "--format", "json"],
+        ),
+    );
+    assert_eq!(v["methods"], plain["methods"]);
+    // Each group's metrics are the metrics of its rows' layer scores, the
+    // out-of-distribution ones against every never-seen row.
+    let rows = rows_of(Path::new(&data("test")));
+    let labels = class_labels(&rows);
+    let ood_rows = rows_of(Path::new(&ood));
+    for (value, g) in groups {
+        let idx: Vec<usize> = (0..rows.len()).filter(|&i| buckets[i] == *value).collect();
+        assert_eq!(g["rows"], idx.len());
+        assert_eq!(keys(&g["methods"]), sorted(&methods(true, &table)));
+        for head in heads_of(&table) {
+            let all = head.flat_scores(&table, &rows);
+            let scores: Vec<f64> = idx
+                .iter()
+                .flat_map(|&i| all[3 * i..3 * i + 3].to_vec())
+                .collect();
+            let g_labels: Vec<Option<usize>> = idx.iter().map(|&i| labels[i]).collect();
+            let m = metrics::evaluate(&scores, 3, &g_labels, &MetricsConfig::default()).unwrap();
+            let got = &g["methods"][head.name];
+            let what = format!("{value}/{}", head.name);
+            assert_eq!(got["ece"].as_f64(), Some(m.ece), "{what}");
+            assert_eq!(got["auroc"].as_f64(), m.auroc, "{what}");
+            assert_eq!(got["ap_car"].as_f64(), m.ap[0], "{what}");
+            let known = metrics::known_confidences(&scores, 3, &g_labels);
+            let unseen: Vec<f64> = head
+                .flat_scores(&table, &ood_rows)
+                .chunks(3)
+                .map(|r| r.iter().copied().fold(0.0, f64::max))
+                .collect();
+            assert_eq!(
+                got["ood_auroc"].as_f64(),
+                metrics::separation_auroc(&known, &unseen),
+                "{what}"
+            );
+            assert_eq!(
+                got["ood_fpr95"].as_f64(),
+                metrics::fpr_at_95_tpr(&known, &unseen),
+                "{what}"
+            );
+        }
+        assert!(g["methods"]["energy"]["ood_auroc"].as_f64().is_some());
+        assert!(g["methods"]["energy"]["ece"].is_null());
+    }
+
+    // Text: the whole set's table, then one per group; markdown: one heading each.
+    let run = ok(d, &args("text"));
+    for value in ["0", "1", "10"] {
+        assert!(
+            run.stdout.contains(&format!("\nbucket = {value}: ")),
+            "{}",
+            run.stdout
+        );
+    }
+    assert_eq!(run.stdout.matches("\nmetric ").count(), 4);
+    let run = ok(d, &args("markdown"));
+    assert_eq!(run.stdout.matches("\n### bucket = ").count(), 3);
+    assert_eq!(run.stdout.matches("| metric |").count(), 4);
+
+    // A test file without the column, an empty value, a reserved name: refused.
+    refused(
+        d,
+        &eval_args(&table_path, &data("test"), &["--group-by", "bucket"]),
+        &["column \"bucket\" (--group-by): has no such column"],
+    );
+    let text = std::fs::read_to_string(&test).unwrap();
+    std::fs::write(d.join("empty.csv"), text.replacen(",1,", ",,", 1)).unwrap();
+    refused(
+        d,
+        &eval_args(&table_path, "empty.csv", &["--group-by", "bucket"]),
+        &["empty.csv:", "the group value is empty"],
+    );
+    refused(
+        d,
+        &eval_args(&table_path, "test.csv", &["--group-by", "label"]),
+        &["--group-by \"label\""],
+    );
 }

@@ -187,7 +187,7 @@ fn eval_args<'a>(table: &'a str, test: &'a str, more: &[&'a str]) -> Vec<&'a str
     args
 }
 
-/// `tune` on a small grid: 3 x 8 ML, 2 x 8 MAP and 2 x 8 Bayes candidates.
+/// `tune` on a small grid: 3 x 9 ML, 2 x 9 MAP and 2 x 9 Bayes candidates.
 fn tune_args<'a>(output: &'a str, train: &'a str, val: &'a str) -> Vec<&'a str> {
     vec![
         "tune",
@@ -446,12 +446,16 @@ impl LayerHead {
 }
 
 /// The methods `eval` reports: the baselines, then every head of `table`.
-fn methods(with_temperature: bool, table: &DynTable) -> Vec<&'static str> {
+fn methods(with_val: bool, table: &DynTable) -> Vec<&'static str> {
     let mut m = vec!["sigmoid", "softmax"];
-    if with_temperature {
-        m.push("temperature");
+    if with_val {
+        m.extend(["temperature", "isotonic"]);
     }
+    m.push("energy");
     m.extend(heads_of(table).map(|h| h.name));
+    if table.open().is_some() && !m.contains(&"open") {
+        m.push("open");
+    }
     m
 }
 

@@ -5,12 +5,13 @@ use mlmap::{EdgeMode, UpperTail};
 
 use super::*;
 
-/// Candidates of [`tune_args`]' grid per head: 3 x 8 (ML), 2 x 8 (MAP), 2 x 8 (Bayes),
-/// and the open head's 50 epsilons (0 and 1e-16 to 1e8, two per decade, DESIGN §4).
+/// Candidates of [`tune_args`]' grid per head: 3 x 9 (ML), 2 x 9 (MAP), 2 x 9 (Bayes):
+/// lambdas from 1e-8 to 1, one per decade; and the open head's 50 epsilons (0 and 1e-16
+/// to 1e8, two per decade, DESIGN §4).
 const CANDIDATES: [(&str, usize); 4] = [
-    ("ml", 3 * 8),
-    ("map", 2 * 8),
-    ("bayes", 2 * 8),
+    ("ml", 3 * 9),
+    ("map", 2 * 9),
+    ("bayes", 2 * 9),
     ("open", 50),
 ];
 
@@ -103,20 +104,22 @@ fn tune_writes_the_best_candidates_and_its_objective_matches_the_metrics() {
     );
     assert!(run
         .stdout
-        .starts_with("ML head: best 5 of 24 candidates by ece, within the guards first\n"));
+        .starts_with("ML head: best 5 of 27 candidates by ece, within the guards first\n"));
     assert!(run
         .stdout
-        .contains("MAP head: best 5 of 16 candidates by ece, within the guards first\n"));
+        .contains("MAP head: best 5 of 18 candidates by ece, within the guards first\n"));
     assert!(run
         .stdout
-        .contains("Bayes head: best 5 of 16 candidates by ece, within the guards first\n"));
+        .contains("Bayes head: best 5 of 18 candidates by ece, within the guards first\n"));
     let rank1: Vec<Vec<&str>> = run
         .stdout
         .lines()
         .filter(|l| l.split_whitespace().next() == Some("1"))
         .map(|l| l.split_whitespace().collect())
         .collect();
-    assert_eq!(rank1.len(), HEADS.len(), "{}", run.stdout);
+    // One rank-1 line per head: the open head's follows the others.
+    let heads = HEADS.len() + usize::from(t.open().is_some());
+    assert_eq!(rank1.len(), heads, "{}", run.stdout);
     for (line, head) in rank1.iter().zip(&HEADS) {
         assert_eq!(line[1], (head.bins)(&t).to_string(), "{line:?}");
         let printed: f64 = line[2].parse().unwrap();
@@ -190,10 +193,29 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
     assert_eq!(cmp["rows"], val_rows.len() + 2000);
     assert_eq!(cmp["ood_rows"], 2000);
     let methods = &cmp["methods"];
-    assert_eq!(
-        keys(methods),
-        sorted(&["softmax", "temperature", "ml", "map", "bayes", "open"])
-    );
+    let mut compared = vec![
+        "softmax",
+        "temperature",
+        "isotonic",
+        "energy",
+        "ml",
+        "map",
+        "bayes",
+    ];
+    if t.open().is_some() {
+        compared.push("open");
+    }
+    assert_eq!(keys(methods), sorted(&compared));
+    // The energy score reports its ranking metrics only; every method has the
+    // separation of known from never-seen rows.
+    for (name, m) in methods.as_object().unwrap() {
+        for key in ["ood_auroc", "ood_fpr95"] {
+            let x = m[key].as_f64().unwrap_or_else(|| panic!("{name}.{key}"));
+            assert!((0.0..=1.0).contains(&x), "{name}.{key} = {x}");
+        }
+    }
+    assert!(methods["energy"]["ece"].is_null());
+    assert!(methods["isotonic"]["ece"].as_f64().is_some());
     // Softmax's accuracy, counted by hand: its decision is the largest logit (the
     // never-seen rows are background and do not count).
     let labels = class_labels(&val_rows);
@@ -261,12 +283,19 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
         .find(|l| l.starts_with("metric "))
         .unwrap();
     let cols: Vec<&str> = header.split_whitespace().collect();
-    assert_eq!(
-        cols,
-        ["metric", "softmax", "temperature", "ml", "map", "bayes", "open"]
-    );
+    let mut want = vec!["metric"];
+    want.extend(&compared);
+    assert_eq!(cols, want);
     for key in [
-        "ece", "nll", "brier", "accuracy", "mAP", "auroc", "ood_mean",
+        "ece",
+        "nll",
+        "brier",
+        "accuracy",
+        "mAP",
+        "auroc",
+        "ood_mean",
+        "ood_auroc",
+        "ood_fpr95",
     ] {
         assert!(
             run.stdout

@@ -256,7 +256,7 @@ pub struct TuneArgs {
     /// Largest lambda of the log grid (ML and MAP; Bayes too unless --lambda-bayes-max).
     #[arg(
         long,
-        default_value_t = 1e-1,
+        default_value_t = 1.0,
         value_name = "X",
         allow_negative_numbers = true
     )]
@@ -319,7 +319,7 @@ pub struct EvalArgs {
     /// Labelled test data.
     #[arg(long, value_name = "FILE")]
     pub test: PathBuf,
-    /// Labelled validation data (fits the temperature baseline).
+    /// Labelled validation data (fits the temperature and isotonic baselines).
     #[arg(long, value_name = "FILE")]
     pub val: Option<PathBuf>,
     /// Out-of-distribution data (never-seen objects; labels ignored).
@@ -337,6 +337,10 @@ pub struct EvalArgs {
     /// ECE bin closure convention.
     #[arg(long, value_parser = named::<Binning>(), default_value = Binning::Design.flag())]
     pub ece_binning: Binning,
+    /// Also report every metric per value of this column of the test file (CSV): the
+    /// column is not a class in any of the data files.
+    #[arg(long, value_name = "COLUMN")]
+    pub group_by: Option<String>,
 }
 
 /// Flags of `inspect`.

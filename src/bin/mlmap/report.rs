@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use mlmap::host::eval::Evaluation;
+use mlmap::host::eval::{Evaluation, Method};
 use mlmap::host::names::Named;
 use mlmap::host::tune::{Candidate, Comparison, Objective, TuneParams, TuneResult, Tuned};
 use mlmap::host::DynTable;
@@ -114,21 +114,24 @@ pub fn json(reports: &[MethodReport], extra: serde_json::Value) -> serde_json::V
     serde_json::Value::Object(top)
 }
 
-/// The per-method reports of an evaluation.
-fn method_reports(ev: &Evaluation) -> Vec<MethodReport> {
-    ev.methods
-        .iter()
-        .map(|r| MethodReport {
-            method: r.method.name(),
-            metrics: ev.entries(r),
+/// The per-method reports of a set of columns.
+fn reports_of(columns: Vec<mlmap::host::eval::Column>) -> Vec<MethodReport> {
+    columns
+        .into_iter()
+        .map(|(method, metrics)| MethodReport {
+            method: method.name(),
+            metrics,
         })
         .collect()
 }
 
-/// An evaluation in `format`.
-pub fn evaluation(ev: &Evaluation, format: Format) -> String {
-    let reports = method_reports(ev);
+/// An evaluation in `format`; with `group_by` (the column's name), each group's
+/// metrics follow: one table per group in text and markdown, `"groups"` in JSON.
+pub fn evaluation(ev: &Evaluation, format: Format, group_by: Option<&str>) -> String {
+    let reports = reports_of(ev.columns());
     let config = &ev.config;
+    let column = group_by.map(mlmap::host::escape::visible);
+    let column = column.as_deref().unwrap_or("group");
     match format {
         Format::Text => {
             let mut s = String::new();
@@ -152,17 +155,53 @@ pub fn evaluation(ev: &Evaluation, format: Format) -> String {
             }
             s.push('\n');
             s.push_str(&text(&reports));
+            for g in &ev.groups {
+                let _ = writeln!(
+                    s,
+                    "\n{column} = {}: {} test rows ({} labelled with a class, {} background)\n",
+                    mlmap::host::escape::visible(&g.value),
+                    g.rows,
+                    g.labelled,
+                    g.rows - g.labelled
+                );
+                s.push_str(&text(&reports_of(ev.group_columns(g))));
+            }
             s
         }
-        Format::Markdown => markdown(&reports),
+        Format::Markdown => {
+            let mut s = markdown(&reports);
+            for g in &ev.groups {
+                let _ = writeln!(
+                    s,
+                    "\n### {column} = {} ({} test rows, {} labelled with a class)\n",
+                    mlmap::host::escape::visible(&g.value),
+                    g.rows,
+                    g.labelled
+                );
+                s.push_str(&markdown(&reports_of(ev.group_columns(g))));
+            }
+            s
+        }
         Format::Json => {
-            let extra = serde_json::json!({
+            let mut extra = serde_json::json!({
                 "rows": ev.rows,
                 "ood_rows": ev.ood_rows,
                 "classes": ev.class_names,
                 "ece_bins": config.bins,
                 "ece_binning": config.binning.name(),
             });
+            if let (Some(o), Some(c)) = (extra.as_object_mut(), group_by) {
+                let mut groups = serde_json::Map::new();
+                for g in &ev.groups {
+                    let counts = serde_json::json!({ "rows": g.rows, "labelled": g.labelled });
+                    groups.insert(
+                        g.value.clone(),
+                        json(&reports_of(ev.group_columns(g)), counts),
+                    );
+                }
+                o.insert("group_by".into(), c.into());
+                o.insert("groups".into(), groups.into());
+            }
             pretty(&json(&reports, extra))
         }
     }
@@ -258,17 +297,30 @@ fn compared_value(m: &mlmap::host::metrics::Metrics, key: &str) -> Option<f64> {
         "mAP" => m.mean_ap(),
         "auroc" => m.auroc,
         "ood_mean" => m.ood.map(|o| o.ood_mean),
+        "ood_auroc" => m.ood.and_then(|o| o.auroc),
+        "ood_fpr95" => m.ood.and_then(|o| o.fpr95),
         _ => None,
     }
 }
 
-/// The keys of the comparison, `ood_mean` with never-seen objects.
+/// The keys of the comparison, `ood_mean`, `ood_auroc` and `ood_fpr95` with
+/// never-seen objects.
 fn compared_keys(c: &Comparison) -> Vec<&'static str> {
     let mut keys = COMPARED.to_vec();
     if c.ood_rows.is_some() {
-        keys.push("ood_mean");
+        keys.extend(["ood_mean", "ood_auroc", "ood_fpr95"]);
     }
     keys
+}
+
+/// The energy score's value of `key` in the comparison: its ranking metrics only.
+fn energy_value(r: &mlmap::host::eval::Ranking, key: &str) -> Option<f64> {
+    match key {
+        "auroc" => r.auroc,
+        "ood_auroc" => r.ood_auroc,
+        "ood_fpr95" => r.ood_fpr95,
+        _ => None,
+    }
 }
 
 /// The sentence naming the head to ship.
@@ -298,25 +350,39 @@ pub fn comparison(c: &Comparison, objective: Objective) -> String {
             |t| format!("temperature T = {t:.4}")
         )
     );
+    // The energy score's column comes after the baselines, before the heads.
+    let heads_from = c
+        .methods
+        .iter()
+        .position(|m| m.method.head().is_some())
+        .unwrap_or(c.methods.len());
+    let (baselines, heads) = c.methods.split_at(heads_from);
     let _ = write!(s, "{:<9}", "metric");
-    for m in &c.methods {
+    for m in baselines {
+        let _ = write!(s, " {:>12}", m.method.name());
+    }
+    let _ = write!(s, " {:>12}", Method::Energy.name());
+    for m in heads {
         let _ = write!(s, " {:>12}", m.method.name());
     }
     s.push('\n');
     for key in compared_keys(c) {
         let _ = write!(s, "{key:<9}");
-        for m in &c.methods {
+        for m in baselines {
+            let _ = write!(s, " {:>12}", fmt_value(compared_value(&m.metrics, key)));
+        }
+        let _ = write!(s, " {:>12}", fmt_value(energy_value(&c.energy, key)));
+        for m in heads {
             let _ = write!(s, " {:>12}", fmt_value(compared_value(&m.metrics, key)));
         }
         s.push('\n');
     }
     let _ = write!(s, "{:<9}", "guards");
-    for m in &c.methods {
-        let mark = match m.method.head() {
-            None => "",
-            Some(_) if m.excess == 0.0 => "ok",
-            Some(_) => "loses",
-        };
+    for _ in 0..=baselines.len() {
+        let _ = write!(s, " {:>12}", "");
+    }
+    for m in heads {
+        let mark = if m.excess == 0.0 { "ok" } else { "loses" };
         let _ = write!(s, " {mark:>12}");
     }
     s.push('\n');
@@ -409,6 +475,17 @@ pub fn tune_json(
         }
         methods.insert(m.method.name().to_string(), o.into());
     }
+    let energy: serde_json::Map<String, serde_json::Value> = compared_keys(c)
+        .into_iter()
+        .map(|key| {
+            let name = if key == "mAP" { "mean_ap" } else { key };
+            let value = energy_value(&c.energy, key)
+                .filter(|x| x.is_finite())
+                .map_or(serde_json::Value::Null, |x| serde_json::json!(x));
+            (name.to_string(), value)
+        })
+        .collect();
+    methods.insert(Method::Energy.name().to_string(), energy.into());
     v.insert(
         "validation".into(),
         serde_json::json!({

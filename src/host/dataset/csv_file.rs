@@ -197,6 +197,9 @@ pub(super) struct Schema {
     label: Option<usize>,
     objectness: Option<usize>,
     id: Option<usize>,
+    /// The column declared not a class ([`DataSource::open_with_column`](super::DataSource::open_with_column)),
+    /// when the header has it.
+    extra: Option<usize>,
     /// Field index of each class's logit, in class order.
     logits: Vec<usize>,
     /// Class name to class index.
@@ -257,8 +260,10 @@ fn read_header(path: &Path, rdr: &mut CsvReader) -> Result<(csv::StringRecord, u
 }
 
 impl Schema {
-    /// Reads and checks the header; returns the class names and the schema.
-    pub(super) fn open(path: &Path) -> Result<(Vec<String>, Self), DataError> {
+    /// Reads and checks the header; returns the class names and the schema. A column
+    /// named `extra` is not a class: its text is given to
+    /// [`for_each_row_with_column`](Self::for_each_row_with_column).
+    pub(super) fn open(path: &Path, extra: Option<&str>) -> Result<(Vec<String>, Self), DataError> {
         let (mut rdr, rereadable) = reader(path)?;
         let (header, header_line) = read_header(path, &mut rdr)?;
         let at_header = |e: DataError| e.at(Location::Line(header_line));
@@ -271,6 +276,7 @@ impl Schema {
             label: None,
             objectness: None,
             id: None,
+            extra: None,
             logits: Vec::new(),
             index: HashMap::new(),
             rereadable,
@@ -294,6 +300,7 @@ impl Schema {
                 "label" => schema.label = Some(i),
                 "objectness" => schema.objectness = Some(i),
                 "id" => schema.id = Some(i),
+                _ if Some(name) == extra => schema.extra = Some(i),
                 _ => {
                     schema.logits.push(i);
                     names.push(name.to_string());
@@ -325,6 +332,10 @@ impl Schema {
         self.objectness.is_some()
     }
 
+    pub(super) fn has_extra(&self) -> bool {
+        self.extra.is_some()
+    }
+
     pub(super) fn rereadable(&self) -> bool {
         self.rereadable
     }
@@ -353,6 +364,21 @@ impl Schema {
     where
         E: From<DataError>,
         F: FnMut(Row<'_>) -> Result<(), E>,
+    {
+        self.for_each_row_with_column(path, classes, |row, _| f(row))
+    }
+
+    /// As [`for_each_row`](Self::for_each_row), with the trimmed text of the declared
+    /// column (`None` when the header does not have it).
+    pub(super) fn for_each_row_with_column<E, F>(
+        &self,
+        path: &Path,
+        classes: &[String],
+        mut f: F,
+    ) -> Result<(), E>
+    where
+        E: From<DataError>,
+        F: FnMut(Row<'_>, Option<&str>) -> Result<(), E>,
     {
         let mut rdr = self.pass(path)?;
         let mut record = csv::StringRecord::new();
@@ -398,14 +424,17 @@ impl Schema {
                     }
                 },
             };
-            f(Row {
-                index,
-                line: Some(line),
-                id: self.id.map(field),
-                label,
-                objectness,
-                logits: &logits,
-            })?;
+            f(
+                Row {
+                    index,
+                    line: Some(line),
+                    id: self.id.map(field),
+                    label,
+                    objectness,
+                    logits: &logits,
+                },
+                self.extra.map(field),
+            )?;
             index += 1;
         }
         Ok(())

@@ -10,7 +10,8 @@
 //! * `nll`, `brier`, the mean and population variance of `conf` over true and false
 //!   positives, `auroc` (true against false positives), `accuracy` (the fraction of
 //!   labelled rows that are correct), `ap_<class>` as
-//!   `sklearn.metrics.average_precision_score`, and `ood_mean`, `ood_over_0_9` on an
+//!   `sklearn.metrics.average_precision_score`, and `ood_mean`, `ood_over_0_9`,
+//!   `ood_auroc` and `ood_fpr95` (known rows against unseen ones) on an
 //!   out-of-distribution set.
 //!
 //! A metric with nothing to average (no labelled row, no true or false positive, no
@@ -37,7 +38,9 @@ use std::vec::Vec;
 pub use self::accumulate::{Accumulator, Parts};
 pub use self::binning::{Binning, CalibrationBin};
 pub use self::outcome::{decision, outcomes, outcomes_with_logits, Outcome};
-pub use self::ranking::{average_precision, precision_recall_curve, PrPoint};
+pub use self::ranking::{
+    average_precision, fpr_at_95_tpr, precision_recall_curve, separation_auroc, PrPoint,
+};
 
 use self::accumulate::{mean_var, Sum};
 use self::outcome::{check_scores, outcome};
@@ -137,6 +140,13 @@ pub struct OodMetrics {
     pub ood_mean: f64,
     /// `ood_over_0_9`: fraction of rows with `conf > 0.9`.
     pub ood_over_0_9: f64,
+    /// `ood_auroc`: the probability that a known row's `conf` (a row labelled with a
+    /// class) exceeds an unseen row's, ties 1/2 ([`separation_auroc`]); `None` without
+    /// known rows, or from [`ood_metrics`] alone.
+    pub auroc: Option<f64>,
+    /// `ood_fpr95`: the share of unseen rows whose `conf` reaches the threshold that
+    /// keeps 95 % of the known rows ([`fpr_at_95_tpr`]); `None` as `auroc`.
+    pub fpr95: Option<f64>,
     /// Number of rows.
     pub rows: usize,
 }
@@ -240,6 +250,8 @@ impl Metrics {
         if let Some(ood) = self.ood {
             out.push((String::from("ood_mean"), Some(ood.ood_mean)));
             out.push((String::from("ood_over_0_9"), Some(ood.ood_over_0_9)));
+            out.push((String::from("ood_auroc"), ood.auroc));
+            out.push((String::from("ood_fpr95"), ood.fpr95));
         }
         out
     }
@@ -409,8 +421,50 @@ pub fn ood_metrics(scores: &[f64], k: usize) -> Result<OodMetrics, MetricsError>
     Ok(OodMetrics {
         ood_mean: sum.value() / n as f64,
         ood_over_0_9: over as f64 / n as f64,
+        auroc: None,
+        fpr95: None,
         rows: n,
     })
+}
+
+/// [`ood_metrics`] of the unseen rows' `scores`, with `ood_auroc` and `ood_fpr95` of
+/// the known rows' confidences `known` (from [`known_confidences`]) against theirs.
+///
+/// # Errors
+///
+/// As [`ood_metrics`].
+///
+/// # Panics
+///
+/// Never.
+pub fn ood_metrics_against(
+    scores: &[f64],
+    k: usize,
+    known: &[f64],
+) -> Result<OodMetrics, MetricsError> {
+    let mut m = ood_metrics(scores, k)?;
+    let unseen: Vec<f64> = scores
+        .chunks_exact(k)
+        .map(|row| outcome::<f64, f64>(row, &[], None).conf)
+        .collect();
+    m.auroc = separation_auroc(known, &unseen);
+    m.fpr95 = fpr_at_95_tpr(known, &unseen);
+    Ok(m)
+}
+
+/// The `conf` (largest score) of every row labelled with a class: the known rows of
+/// `ood_auroc` and `ood_fpr95`. Rows beyond the shorter of `scores` and `labels` are
+/// left out.
+pub fn known_confidences(scores: &[f64], k: usize, labels: &[Option<usize>]) -> Vec<f64> {
+    if k == 0 {
+        return Vec::new();
+    }
+    scores
+        .chunks_exact(k)
+        .zip(labels)
+        .filter(|(_, l)| l.is_some())
+        .map(|(row, _)| outcome::<f64, f64>(row, &[], None).conf)
+        .collect()
 }
 
 #[cfg(test)]
@@ -534,12 +588,19 @@ mod tests {
         let ood = ood_metrics(&[0.95, 0.0, 0.9, 0.05, 0.3, 0.2], 2).unwrap();
         assert!((ood.ood_mean - (0.95 + 0.9 + 0.3) / 3.0).abs() < 1e-15);
         assert_eq!(ood.ood_over_0_9, 1.0 / 3.0);
-        let keys = m.with_ood(ood).entries::<&str>(&[]);
-        assert_eq!(keys[keys.len() - 2].0, "ood_mean");
+        let keys = m.clone().with_ood(ood).entries::<&str>(&[]);
+        assert_eq!(keys[keys.len() - 4].0, "ood_mean");
         assert_eq!(
-            keys[keys.len() - 1],
+            keys[keys.len() - 3],
             (String::from("ood_over_0_9"), Some(1.0 / 3.0))
         );
+        assert_eq!(keys[keys.len() - 1], (String::from("ood_fpr95"), None));
+        // Known confidences 1.0 (row 0, labelled) against unseen 0.95, 0.9, 0.3.
+        let known = known_confidences(&scores, 2, &[Some(0), None]);
+        assert_eq!(known, [1.0]);
+        let against = ood_metrics_against(&[0.95, 0.0, 0.9, 0.05, 0.3, 0.2], 2, &known).unwrap();
+        assert_eq!((against.auroc, against.fpr95), (Some(1.0), Some(0.0)));
+        assert_eq!(against.ood_mean, ood.ood_mean);
     }
 
     #[test]

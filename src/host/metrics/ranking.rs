@@ -56,6 +56,77 @@ pub(super) fn auroc(outcomes: &[Outcome]) -> Option<f64> {
     Some(twice_u as f64 / (2 * tp * fp) as f64)
 }
 
+/// The order of any non-NaN `f64` as a `u64` (`-0.0` as `0.0`): the sign bit flipped
+/// for non-negative values, every bit flipped for negative ones.
+fn signed_key(v: f64) -> u64 {
+    let bits = (v + 0.0).to_bits();
+    if bits >> 63 == 1 {
+        !bits
+    } else {
+        bits | (1 << 63)
+    }
+}
+
+/// AUROC of `positive` against `negative` values: the probability that a positive
+/// exceeds a negative, ties counting 1/2 (the Mann-Whitney statistic, exact in
+/// integers until the final division); `None` when either side is empty. Values are
+/// any non-NaN numbers (NaN values are left out).
+pub fn separation_auroc(positive: &[f64], negative: &[f64]) -> Option<f64> {
+    let mut v: Vec<(u64, bool)> = positive
+        .iter()
+        .filter(|x| !x.is_nan())
+        .map(|&x| (signed_key(x), true))
+        .chain(
+            negative
+                .iter()
+                .filter(|x| !x.is_nan())
+                .map(|&x| (signed_key(x), false)),
+        )
+        .collect();
+    let p = v.iter().filter(|x| x.1).count() as u128;
+    let n = v.len() as u128 - p;
+    if p == 0 || n == 0 {
+        return None;
+    }
+    v.sort_unstable();
+    let (mut twice_u, mut neg_below) = (0u128, 0u128);
+    for group in v.chunk_by(|a, b| a.0 == b.0) {
+        let p_g = group.iter().filter(|x| x.1).count() as u128;
+        let n_g = group.len() as u128 - p_g;
+        twice_u += p_g * (2 * neg_below + n_g);
+        neg_below += n_g;
+    }
+    Some(twice_u as f64 / (2 * p * n) as f64)
+}
+
+/// The share of `negative` values at or above the threshold that keeps 95 % of the
+/// `positive` ones: the threshold is the largest value `t` with at least
+/// `ceil(0.95 * P)` positives `>= t` (the `m`-th largest positive), as
+/// `sklearn.metrics.roc_curve` gives the false-positive rate at the first point whose
+/// true-positive rate reaches 0.95. `None` when either side is empty. NaN values are
+/// left out.
+pub fn fpr_at_95_tpr(positive: &[f64], negative: &[f64]) -> Option<f64> {
+    let mut pos: Vec<u64> = positive
+        .iter()
+        .filter(|x| !x.is_nan())
+        .map(|&x| signed_key(x))
+        .collect();
+    let neg: Vec<u64> = negative
+        .iter()
+        .filter(|x| !x.is_nan())
+        .map(|&x| signed_key(x))
+        .collect();
+    if pos.is_empty() || neg.is_empty() {
+        return None;
+    }
+    // m = ceil(95 P / 100), in integers.
+    let m = (95 * pos.len()).div_ceil(100).max(1);
+    pos.sort_unstable_by(|a, b| b.cmp(a));
+    let threshold = *pos.get(m - 1)?;
+    let above = neg.iter().filter(|&&x| x >= threshold).count();
+    Some(above as f64 / neg.len() as f64)
+}
+
 /// Precision-recall points of one class, thresholds in decreasing order, after
 /// checking; empty when the class has no positive row.
 pub(super) fn pr_points(
@@ -158,6 +229,28 @@ pub fn precision_recall_curve(
 mod tests {
     use super::*;
     use crate::host::testing::lcg;
+
+    #[test]
+    fn separation_by_hand() {
+        // Positives 3, 1, -1; negatives 1, -2: pairs 3>1, 3>-2, 1=1 (1/2), 1>-2, -1>-2,
+        // -1<1: 4.5 of 6.
+        assert_eq!(
+            separation_auroc(&[3.0, 1.0, -1.0], &[1.0, -2.0]),
+            Some(0.75)
+        );
+        assert_eq!(separation_auroc(&[-0.0], &[0.0]), Some(0.5));
+        assert_eq!(separation_auroc(&[], &[1.0]), None);
+        assert_eq!(separation_auroc(&[f64::NEG_INFINITY], &[-1e300]), Some(0.0));
+        // 20 positives 1..=20: m = 19, threshold 2; negatives >= 2: 2 and 5 of 4.
+        let pos: Vec<f64> = (1..=20).map(f64::from).collect();
+        assert_eq!(fpr_at_95_tpr(&pos, &[0.0, 2.0, 5.0, 1.5]), Some(0.5));
+        // 21 positives: m = ceil(19.95) = 20, threshold 2 again.
+        let pos: Vec<f64> = (1..=21).map(f64::from).collect();
+        assert_eq!(fpr_at_95_tpr(&pos, &[0.0, 2.0, 5.0, 1.5]), Some(0.5));
+        // One positive: its own value is the threshold.
+        assert_eq!(fpr_at_95_tpr(&[-3.0], &[-3.0, -4.0]), Some(0.5));
+        assert_eq!(fpr_at_95_tpr(&[1.0], &[]), None);
+    }
 
     fn ap(scores: &[f64], labels: &[Option<usize>]) -> Option<f64> {
         average_precision(&precision_recall_curve(scores, 1, labels, 0).unwrap())

@@ -12,7 +12,7 @@ use super::{
 use crate::host::baselines::{self, Baseline, Rows};
 use crate::host::data::{check_classes, Loaded};
 use crate::host::error::HostError;
-use crate::host::eval::{head_scores, Method};
+use crate::host::eval::{head_scores, Method, Ranking};
 use crate::host::fit::{build_table, FitError, TrainingSet};
 use crate::host::metrics::{self, Metrics, MetricsConfig};
 use crate::host::names::Named;
@@ -139,8 +139,10 @@ pub struct Comparison {
     pub temperature: Option<f64>,
     /// Softmax's accuracy and mAP, which the guards compare against.
     pub reference: Reference,
-    /// The methods: softmax, temperature, then every head in the table.
+    /// The methods: softmax, temperature, isotonic, then every head in the table.
     pub methods: Vec<Compared>,
+    /// The energy score's ranking metrics on the same rows (DESIGN §1.5).
+    pub energy: Ranking,
     /// The head with the best objective among the heads within the guards; `None`
     /// when no head is.
     pub best: Option<Method>,
@@ -196,7 +198,12 @@ impl Scored {
             return Ok(m);
         }
         let ood = scores.get(val_rows * k..).unwrap_or(&[]);
-        Ok(m.with_ood(metrics::ood_metrics(ood, k).map_err(|e| e.to_string())?))
+        let known = metrics::known_confidences(
+            scores.get(..val_rows * k).unwrap_or(&[]),
+            k,
+            self.labels.get(..val_rows).unwrap_or(&[]),
+        );
+        Ok(m.with_ood(metrics::ood_metrics_against(ood, k, &known).map_err(|e| e.to_string())?))
     }
 }
 
@@ -380,8 +387,9 @@ fn score_baseline(b: Baseline, rows: &Scored, k: usize) -> Result<Vec<f64>, Stri
     baselines::score_rows(b, &r).map_err(|e| e.to_string())
 }
 
-/// Softmax, temperature scaling (`T` fitted on the validation rows) and every head of
-/// `table` on `rows`; names the best head within the guards.
+/// Softmax, temperature scaling and isotonic regression (fitted on the rows of the
+/// validation file), the energy score, and every head of `table` on `rows`; names the
+/// best head within the guards.
 #[allow(clippy::too_many_arguments)]
 fn compare(
     table: &DynTable,
@@ -404,11 +412,42 @@ fn compare(
         .ok()
         .map(|f| f.t);
     let with_ood = ood.is_some();
+    // The energy score, split into true and false positives as softmax decides.
+    let energy = {
+        let all = Rows::new(&rows.logits, k, &[], &[]).map_err(|e| fail(e.to_string()))?;
+        let e = baselines::negative_energies(&all).map_err(|e| fail(e.to_string()))?;
+        let outcomes = metrics::outcomes_with_logits(&softmax, &rows.logits, k, &rows.labels)
+            .map_err(|e| fail(e.to_string()))?;
+        let pick = |keep: &dyn Fn(usize) -> bool| -> Vec<f64> {
+            e.iter()
+                .enumerate()
+                .filter(|&(i, _)| keep(i))
+                .map(|(_, &v)| v)
+                .collect()
+        };
+        let correct = |i: usize| outcomes.get(i).is_some_and(|o| o.correct);
+        let known = pick(&|i| i < n_val && val_labels.get(i).is_some_and(Option::is_some));
+        let unseen = pick(&|i| i >= n_val);
+        Ranking {
+            auroc: metrics::separation_auroc(&pick(&correct), &pick(&|i| !correct(i))),
+            ood_auroc: with_ood
+                .then(|| metrics::separation_auroc(&known, &unseen))
+                .flatten(),
+            ood_fpr95: with_ood
+                .then(|| metrics::fpr_at_95_tpr(&known, &unseen))
+                .flatten(),
+        }
+    };
     let mut methods = vec![(Method::Softmax, softmax, Some(softmax_m))];
     if let Some(t) = t {
         let temperature = score_baseline(Baseline::Temperature(t), rows, k).map_err(&fail)?;
         methods.push((Method::Temperature, temperature, None));
     }
+    // Isotonic maps fitted on the same rows as the temperature (the validation file).
+    let iso = baselines::fit_isotonic(&fit_rows).map_err(|e| HostError::input(val_path, e))?;
+    let all = Rows::new(&rows.logits, k, &[], &rows.objectness).map_err(|e| fail(e.to_string()))?;
+    let isotonic = baselines::score_isotonic(&iso, &all).map_err(|e| fail(e.to_string()))?;
+    methods.push((Method::Isotonic, isotonic, None));
     for method in [Method::Ml, Method::Map, Method::Bayes, Method::Open] {
         let Some(head) = method.head() else { continue };
         if (head == Head::Bayes && table.bayes().is_none())
@@ -453,6 +492,7 @@ fn compare(
         temperature: t,
         reference: judge.reference,
         methods: out,
+        energy,
         best,
     })
 }

@@ -152,6 +152,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         val: Some((&val, &val_p)),
         ood: Some((&ood, &ood_p)),
         config,
+        groups: None,
     })?;
     for (format, name) in [
         (Format::Text, "eval.txt"),
@@ -160,7 +161,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     ] {
         output::write_bytes_atomic(
             &a.output.join(name),
-            report::evaluation(&ev, format).as_bytes(),
+            report::evaluation(&ev, format, None).as_bytes(),
         )?;
     }
     let plots_dir = a.output.join("plots");
@@ -171,7 +172,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         test_p.display(),
         ood_p.display()
     );
-    log.push_str(&report::evaluation(&ev, Format::Text));
+    log.push_str(&report::evaluation(&ev, Format::Text, None));
 
     // 4. The no_std layer decodes the written table and scores like the host.
     let bytes = std::fs::read(&tuned_path).map_err(|e| CliError::internal(&tuned_path, e))?;
