@@ -150,7 +150,8 @@ impl<'a> BayesView<'a> {
 
     /// The log-scores `l[c] = ln pi[c] + sum_j t[c][j][bin_j(x_j)]` of one detection
     /// into `l` (one per category); shared by this head and the open head (§1.8).
-    #[inline]
+    /// Inlined into each head, so that a fixed-size table's lengths are constants there.
+    #[inline(always)]
     pub(crate) fn log_scores_into(&self, logits: &[f32], l: &mut [f32]) -> Result<(), InferError> {
         let b = self.bins();
         if logits.len() != self.logits() || l.len() != self.categories() {

@@ -141,7 +141,7 @@ fn known_share<M: Backend>(l: &[f32], k: usize, log_unknown: f32) -> f32 {
 
 /// Open-head scores of one detection from a Bayes head's log-scores: the entry of
 /// [`BayesView`](crate::BayesView)-backed tables.
-#[inline]
+#[inline(always)]
 pub(crate) fn score_into<M: Backend>(
     bayes: &crate::BayesView<'_>,
     open: &OpenParams,
