@@ -700,7 +700,10 @@ fn malformed_sections_are_refused_with_their_error() {
         },
     );
     assert_eq!(no_bayes[4], 1);
-    assert_eq!(read(&patched(&no_bayes, 4, &[2])), Err(QTableError::Malformed));
+    assert_eq!(
+        read(&patched(&no_bayes, 4, &[2])),
+        Err(QTableError::Malformed)
+    );
     // Every truncation, and a byte added before the trailer.
     for n in 0..sec.len() {
         assert!(read(&sec[..n]).is_err(), "prefix of {n} bytes");
@@ -842,7 +845,8 @@ mod random {
                 };
                 check_scores(&got, os, sum).map_err(|v| TestCaseError::fail(v.to_string()))?;
                 if head == Head::Open {
-                    check_open_decision(&got, &x).map_err(|v| TestCaseError::fail(v.to_string()))?;
+                    check_open_decision(&got, &x)
+                        .map_err(|v| TestCaseError::fail(v.to_string()))?;
                 }
             }
         }
@@ -945,7 +949,10 @@ fn shipped_quantized_file_and_embedded_section() {
     assert_eq!(QUANTIZED, read);
     // The shipped table's open head (T = 1, epsilon = 0), in the file and embedded.
     assert_eq!(file[SHIPPED_MLMAP.len() + 4], 2, "a version-2 section");
-    assert_eq!(open_bits(QUANTIZED.open_params()), open_bits(shipped().open_params()));
+    assert_eq!(
+        open_bits(QUANTIZED.open_params()),
+        open_bits(shipped().open_params())
+    );
     for codes in [[0i8, 0, 0], [50, -20, 10], [127, -128, 3]] {
         assert_eq!(QUANTIZED.bayes(&codes, 0.8), read.bayes(&codes, 0.8));
         let x = read.logits(&codes);

@@ -11,8 +11,8 @@ use crate::histogram::Histogram;
 use crate::layer;
 use crate::math::Libm;
 use crate::qtable::{
-    code_range, dequantize, index_width, HEADER_LEN, OPEN_LEN, QUANTIZED_MAGIC,
-    QUANTIZED_VERSION, QUANTIZED_VERSION_1,
+    code_range, dequantize, index_width, HEADER_LEN, OPEN_LEN, QUANTIZED_MAGIC, QUANTIZED_VERSION,
+    QUANTIZED_VERSION_1,
 };
 use crate::view::TableView;
 use crate::wire::{self, CRC};
