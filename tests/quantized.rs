@@ -189,6 +189,28 @@ fn int8_open_head_equals_f32_layer_for_every_code() {
     int8_everywhere(&small_open_nobg());
 }
 
+/// A scale so large that most dequantized logits overflow to infinity: the open head's
+/// softmax takes them as its limit, and the quantized head still equals the `f32` one.
+#[test]
+fn int8_open_head_with_infinite_dequantized_logits() {
+    let t = small_open();
+    let (scales, zps) = ([3e38f32, 1e38, 2e37], [0i32, -1, 5]);
+    let p = QParams {
+        bits: 8,
+        scales: &scales,
+        zero_points: &zps,
+        bayes: true,
+    };
+    let bytes = section(&t, &p);
+    let q = QTable::<3, i8>::from_bytes(&bytes).unwrap();
+    assert_eq!(
+        q.logits(&[2, -3, 127])[..2],
+        [f32::INFINITY, f32::NEG_INFINITY]
+    );
+    let all: Vec<i8> = (i8::MIN..=i8::MAX).collect();
+    agree(&t, &q, (scales, zps), &all, &[-128, -1, 0, 1, 127]);
+}
+
 /// With epsilon 0 and no background, the quantized open head is the temperature layer
 /// of DESIGN §1.4 on the dequantized logits, bit for bit (DESIGN §1.8's invariant); with
 /// epsilon > 0 every score is below it.

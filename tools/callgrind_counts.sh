@@ -10,8 +10,8 @@
 # of the loop around the layer (kind `noop`: fetch a row, call through a function pointer,
 # fold the result into a checksum). Kinds: the Sigmoid layer with libm and with FastMath,
 # Softmax, ML, MAP with libm (`map`), FastMath (`map_fast`) and Micromath
-# (`map_micromath`), the Bayes head with libm (`bayes`) and FastMath (`bayes_fast`),
-# decoding, and the quantized table on int8 codes of the same rows (`q8_ml`, `q8_map`,
+# (`map_micromath`), the Bayes head with libm (`bayes`) and FastMath (`bayes_fast`), the
+# open head (`open`, FastMath), decoding, and the quantized table on int8 codes of the same rows (`q8_ml`, `q8_map`,
 # `q8_bayes`, `q8_open`; `q8_noop` is their loop; `q8_decode` reads the section).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -32,14 +32,14 @@ count() {
 
 declare -A per
 printf '%-14s %14s %14s %12s\n' kind "Ir(N=$n)" "Ir(2N)" "Ir/detection"
-for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast decode q8_noop q8_ml q8_map q8_bayes q8_open q8_decode; do
+for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast open decode q8_noop q8_ml q8_map q8_bayes q8_open q8_decode; do
     a="$(count "$kind" "$n")"
     b="$(count "$kind" "$((2 * n))")"
     per[$kind]="$(python3 -c "print(f'{($b - $a) / $n:.1f}')")"
     printf '%-14s %14s %14s %12s\n' "$kind" "$a" "$b" "${per[$kind]}"
 done
 echo
-for kind in sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast q8_ml q8_map q8_bayes q8_open; do
+for kind in sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast open q8_ml q8_map q8_bayes q8_open; do
     loop=noop
     [[ $kind == q8_* ]] && loop=q8_noop
     python3 -c "
