@@ -345,7 +345,7 @@ fn shipped_int8_section_size() {
 /// The layout of docs/FORMAT.md: a table with the open head gets a version-2 section,
 /// which is the version-1 section of the same table without the open head (the table
 /// CRC it names aside), with the version byte 2 and the open record (temperature,
-/// epsilon, the Bayes head's lambda: `f32` LE each) between the log priors and the
+/// epsilon, the unknown log-score: `f32` LE each) between the log priors and the
 /// trailer.
 #[cfg(feature = "std")]
 #[test]
@@ -377,7 +377,16 @@ fn open_record_layout() {
         // The body, then the open record.
         let body = v1.len() - 8;
         assert_eq!(v1[20..body], v2[20..body]);
-        let record: Vec<u8> = [1.75f32, 0.05, with.bayes().unwrap().lambda()]
+        // The unknown's log-score: ln(0.05) + 3 ln(1/4 + lambda) in f64 (the table's
+        // f32 value within a few rounding steps).
+        let lambda = f64::from(with.bayes().unwrap().lambda());
+        let log_unknown = with.open().unwrap().log_unknown();
+        let want = 0.05f64.ln() + 3.0 * (0.25 + lambda).ln();
+        assert!(
+            (f64::from(log_unknown) - want).abs() < 1e-5,
+            "{log_unknown} vs {want}"
+        );
+        let record: Vec<u8> = [1.75f32, 0.05, log_unknown]
             .iter()
             .flat_map(|v| v.to_le_bytes())
             .collect();
@@ -672,9 +681,14 @@ fn malformed_sections_are_refused_with_their_error() {
         read(&patched(&sec, prior_at + 12, &f32::INFINITY.to_le_bytes())),
         invalid(QField::LogTerm, 3)
     );
-    // The open record: temperature, epsilon, the Bayes lambda.
-    let lambda = f32::from_le_bytes(sec[open_at + 8..open_at + 12].try_into().unwrap());
-    assert_eq!(lambda, 0.001, "the shipped table's Bayes lambda");
+    // The open record: temperature, epsilon, the unknown log-score (the shipped table:
+    // epsilon 0, so -inf).
+    let record =
+        |at: usize| f32::from_le_bytes(sec[open_at + at..open_at + at + 4].try_into().unwrap());
+    assert_eq!(
+        (record(0), record(4), record(8)),
+        (1.0, 0.0, f32::NEG_INFINITY)
+    );
     let open_cases: Vec<(usize, f32, QField)> = vec![
         (0, 0.0, QField::Temperature),
         (0, -1.0, QField::Temperature),
@@ -687,12 +701,12 @@ fn malformed_sections_are_refused_with_their_error() {
         (4, 2e30, QField::Epsilon),
         (4, f32::INFINITY, QField::Epsilon),
         (4, f32::NAN, QField::Epsilon),
-        (8, 0.0, QField::BayesLambda),
-        (8, 1.5, QField::BayesLambda),
-        (8, f32::NAN, QField::BayesLambda),
-        // Another lambda than the one whose logarithm the header holds.
-        (8, 0.002, QField::BayesLambda),
-        (8, f32::from_bits(lambda.to_bits() + 1), QField::BayesLambda),
+        // An unknown category with epsilon 0, or none with epsilon > 0.
+        (8, 0.0, QField::LogUnknown),
+        (8, -1e30, QField::LogUnknown),
+        (8, f32::NAN, QField::LogUnknown),
+        (8, f32::INFINITY, QField::LogUnknown),
+        (4, 0.01, QField::LogUnknown),
     ];
     for (at, v, field) in open_cases {
         assert_eq!(
@@ -702,14 +716,27 @@ fn malformed_sections_are_refused_with_their_error() {
         );
     }
     // Values in range are read as they are: the smallest and largest temperature and
-    // epsilon (the derived log-score is the table decoder's, compared in
-    // `int8_open_head_equals_f32_layer_for_every_code`).
-    for (at, v) in [(0, 1e-6f32), (0, 1e6), (4, f32::MIN_POSITIVE), (4, 1e30)] {
-        let q = QTable::<3, i8>::from_bytes(&patched(&sec, open_at + at, &v.to_le_bytes()))
-            .unwrap()
-            .open_params()
-            .unwrap();
-        assert_eq!([q.temperature(), q.epsilon()][at / 4], v);
+    // epsilon, each epsilon > 0 with a finite log-score (the values `quantize` writes
+    // are compared with the table's in `int8_open_head_equals_f32_layer_for_every_code`).
+    let read_open = |t: f32, e: f32, l: f32| {
+        let mut rec = Vec::new();
+        for v in [t, e, l] {
+            rec.extend_from_slice(&v.to_le_bytes());
+        }
+        QTable::<3, i8>::from_bytes(&patched(&sec, open_at, &rec))
+            .map(|q| open_bits(q.open_params()))
+    };
+    for (t, e, l) in [
+        (1e-6f32, 0.0, f32::NEG_INFINITY),
+        (1e6, 0.0, f32::NEG_INFINITY),
+        (1.0, f32::MIN_POSITIVE, -100.0),
+        (1.0, 1e30, 60.0),
+        (2.5, 0.3, -1e30),
+    ] {
+        assert_eq!(
+            read_open(t, e, l),
+            Ok(Some([t.to_bits(), e.to_bits(), l.to_bits()]))
+        );
     }
     // Version 2 needs the Bayes head: a section without it, marked version 2.
     let no_bayes = section(
@@ -740,6 +767,59 @@ fn malformed_sections_are_refused_with_their_error() {
     longer.extend_from_slice(&len.to_le_bytes());
     longer.extend_from_slice(&[0; 4]);
     assert_eq!(read(&fix_crc(&longer)), Err(QTableError::Malformed));
+}
+
+/// The open record's temperature and epsilon are accepted exactly where the table
+/// accepts them (`DynTable::with_open`, the table decoder's rule): at, just inside and
+/// just outside every bound, and NaN, infinities and -0.
+#[cfg(feature = "std")]
+#[test]
+fn open_record_ranges_are_the_tables() {
+    let sec = shipped_section(8);
+    let open_at = sec.len() - 8 - 12;
+    let table = mlmap::host::DynTable::from_table(&shipped());
+    let up = |v: f32| f32::from_bits(v.to_bits() + 1);
+    let down = |v: f32| f32::from_bits(v.to_bits() - 1);
+    let (tmin, tmax, emax) = (
+        mlmap::MIN_TEMPERATURE,
+        mlmap::MAX_TEMPERATURE,
+        mlmap::MAX_EPSILON,
+    );
+    let odd = [
+        0.0f32,
+        -0.0,
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        -1.0,
+        f32::from_bits(1),
+    ];
+    let temperatures = [tmin, up(tmin), down(tmin), 1.0, tmax, up(tmax), down(tmax)];
+    let epsilons = [
+        f32::MIN_POSITIVE,
+        down(f32::MIN_POSITIVE),
+        0.5,
+        emax,
+        up(emax),
+        down(emax),
+    ];
+    let record = |t: f32, e: f32| {
+        // -inf with epsilon 0 (of either sign), a finite log-score otherwise.
+        let l = if e == 0.0 { f32::NEG_INFINITY } else { -1.0 };
+        let mut rec = Vec::new();
+        for v in [t, e, l] {
+            rec.extend_from_slice(&v.to_le_bytes());
+        }
+        QTable::<3, i8>::from_bytes(&patched(&sec, open_at, &rec)).is_ok()
+    };
+    for t in temperatures.iter().chain(&odd) {
+        let want = table.clone().with_open(*t, 0.0).is_ok();
+        assert_eq!(record(*t, 0.0), want, "temperature {t:e}");
+    }
+    for e in epsilons.iter().chain(&odd) {
+        let want = table.clone().with_open(1.0, *e).is_ok();
+        assert_eq!(record(1.0, *e), want, "epsilon {e:e} ({:#x})", e.to_bits());
+    }
 }
 
 /// Every byte of the section set to a few values, the CRC fixed: no panic, and any

@@ -33,14 +33,14 @@
 //!   axis, and that logit's rows of log-terms; outside the axis a logit adds
 //!   `ln(lambda)`, as in the `f32` head.
 //! * Open (optional, with the Bayes head; section version 2): the temperature, `epsilon`
-//!   and the Bayes head's `lambda`, from which the reader derives the unknown category's
-//!   log-score exactly as the table decoder does. The head's log-scores are the Bayes
-//!   head's, and its softmax runs on the dequantized logits (DESIGN §1.8).
+//!   and the unknown category's log-score as the table decoder derived it. The head's
+//!   log-scores are the Bayes head's, and its softmax runs on the dequantized logits
+//!   (DESIGN §1.8).
 
 use crate::bayes;
-use crate::error::{Head, InferError, TableError};
+use crate::error::{Head, InferError};
 use crate::layer::{self, Scores};
-use crate::math::{self, Backend};
+use crate::math::Backend;
 use crate::open::{self, OpenParams};
 use crate::view::{BayesBackend, OpenBackend};
 use crate::wire::CRC_CHECK;
@@ -56,7 +56,7 @@ pub const QUANTIZED_VERSION: u8 = 2;
 /// The version of sections without the open head.
 pub(crate) const QUANTIZED_VERSION_1: u8 = 1;
 
-/// Bytes of the open head's record (version 2): temperature, epsilon, Bayes lambda.
+/// Bytes of the open head's record (version 2): temperature, epsilon, unknown log-score.
 pub(crate) const OPEN_LEN: usize = 12;
 
 /// Bytes of the fixed header of a quantized section.
@@ -197,10 +197,9 @@ pub enum QField {
     /// The open head's `epsilon` is not 0 and not in
     /// `[f32::MIN_POSITIVE, `[`MAX_EPSILON`](crate::MAX_EPSILON)`]`.
     Epsilon,
-    /// The open head's copy of the Bayes `lambda` is not in
-    /// `(0, `[`MAX_LAMBDA_BAYES`](crate::MAX_LAMBDA_BAYES)`]`, or its logarithm is not
-    /// the header's `ln(lambda)`.
-    BayesLambda,
+    /// The open head's unknown log-score is not `-inf` with `epsilon` 0, or not finite
+    /// with `epsilon` > 0.
+    LogUnknown,
 }
 
 impl QField {
@@ -217,7 +216,9 @@ impl QField {
             Self::LogTerm => "Bayes log-term (not finite and small)",
             Self::Temperature => "open head's temperature (out of range)",
             Self::Epsilon => "open head's epsilon (neither 0 nor in range)",
-            Self::BayesLambda => "open head's Bayes lambda (out of range, or not the header's)",
+            Self::LogUnknown => {
+                "open head's unknown log-score (not -inf for epsilon 0, or not finite)"
+            }
         }
     }
 }
@@ -586,26 +587,33 @@ pub(crate) fn parse<'a>(
     }
     let mut open = None;
     if has_open {
-        let (temperature, epsilon, lambda) = (r.f32()?, r.f32()?, r.f32()?);
-        // The table decoder's `ln(lambda)` (bayes::validate): the copy of lambda is the
-        // one the header's logarithm was computed from.
-        let lambda_ok = lambda > 0.0 && lambda <= crate::MAX_LAMBDA_BAYES;
-        if !(lambda_ok && math::ln(lambda).to_bits() == log_lambda.to_bits()) {
-            return Err(invalid(QField::BayesLambda, 0));
+        let (t, e, l) = (r.u32()?, r.u32()?, r.u32()?);
+        // The ranges of `OpenParams::new`, checked on the bits (which take less code on
+        // a device than the float comparisons): a positive `f32` orders as its bits, and
+        // NaN, negative values (-0 included) and infinities fall outside.
+        let bits = |v: f32| v.to_bits();
+        if !(bits(crate::MIN_TEMPERATURE)..=bits(crate::MAX_TEMPERATURE)).contains(&t) {
+            return Err(invalid(QField::Temperature, 0));
         }
-        // The unknown category's log-score, derived as the table decoder derives it.
-        let params = OpenParams::new(
-            temperature,
-            epsilon,
-            usize::from(k),
-            usize::from(bins_bayes),
-            lambda,
-        )
-        .map_err(|e| match e {
-            TableError::Temperature => invalid(QField::Temperature, 0),
-            _ => invalid(QField::Epsilon, 0),
-        })?;
-        open = Some(params);
+        if !(e == 0 || (bits(f32::MIN_POSITIVE)..=bits(crate::MAX_EPSILON)).contains(&e)) {
+            return Err(invalid(QField::Epsilon, 0));
+        }
+        // As `OpenParams::new` derives it: -inf exactly when there is no unknown
+        // category, finite otherwise. (Its value is the writer's, as every precomputed
+        // value of the section: deriving it here would need `ln` on the device.)
+        let finite = l & 0x7f80_0000 != 0x7f80_0000;
+        if !(if e == 0 {
+            l == bits(f32::NEG_INFINITY)
+        } else {
+            finite
+        }) {
+            return Err(invalid(QField::LogUnknown, 0));
+        }
+        open = Some(OpenParams {
+            temperature: f32::from_bits(t),
+            epsilon: f32::from_bits(e),
+            log_unknown: f32::from_bits(l),
+        });
     }
     if !r.0.is_empty() {
         return Err(QTableError::Malformed);
@@ -1072,8 +1080,8 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
     }
 
     /// The open head's parameters (DESIGN §1.8), when the section has that head: the
-    /// table's temperature and `epsilon`, and the unknown category's log-score derived
-    /// from them as the table decoder derives it.
+    /// table's temperature, `epsilon` and unknown log-score, as the table decoder
+    /// derived them.
     #[inline]
     pub fn open_params(&self) -> Option<OpenParams> {
         self.meta.open

@@ -5,7 +5,7 @@
 //! `Libm` backend of [`Table::map`](crate::Table::map)), and the Bayes head's bin per
 //! logit. So the quantized heads reproduce the `f32` heads bit for bit. The open head
 //! (DESIGN §1.8) comes with the Bayes head whenever the table has it: its parameters are
-//! copied, and the reader derives the rest as the table decoder does.
+//! copied as the table decoder derived them.
 
 use crate::histogram::Histogram;
 use crate::layer;
@@ -163,7 +163,7 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
     let (bins_bayes, cats) = bayes.map_or((0, 0), |b| (narrow(b.bins()), narrow(b.categories())));
     // The open head rides with the Bayes head: version 2 exactly when it is there, so a
     // section without it keeps the bytes of version 1.
-    let open = bayes.and_then(|b| Some((b.open()?, b.lambda)));
+    let open = bayes.and_then(|b| b.open());
     let version = if open.is_some() {
         QUANTIZED_VERSION
     } else {
@@ -230,9 +230,9 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
             out.put(&b.log_prior(c).unwrap_or(0.0).to_le_bytes())?;
         }
     }
-    if let Some((o, lambda)) = open {
+    if let Some(o) = open {
         let before = out.len;
-        for v in [o.temperature(), o.epsilon(), lambda] {
+        for v in [o.temperature(), o.epsilon(), o.log_unknown()] {
             out.put(&v.to_le_bytes())?;
         }
         debug_assert_eq!(out.len - before, OPEN_LEN);
