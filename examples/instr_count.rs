@@ -11,8 +11,8 @@
 //! `Libm` and `FastMath`), `open` (the open head as shipped: T = 1, epsilon = 0),
 //! `open_eps` (the open head with T = 1.37 and epsilon = 1e-3, an unknown category as
 //! `tune` chooses one), `sigmoid_fast` (the Sigmoid layer
-//! with `FastMath`), `q8_ml`, `q8_map`, `q8_bayes` (the quantized table, int8 codes
-//! `round(x / 0.08)` of the same rows), `q8_noop` (the loop around the quantized
+//! with `FastMath`), `q8_ml`, `q8_map`, `q8_bayes`, `q8_open` (the quantized table, int8
+//! codes `round(x / 0.08)` of the same rows), `q8_noop` (the loop around the quantized
 //! kinds), `q8_decode` (`QTable::from_bytes` of the section), `decode`, and `noop` (a layer that only copies the logits: the cost
 //! of the loop around the layer). The detections are
 //! the first 4096 rows of `examples/data/test.csv`, cycled in file order; use an N that
@@ -34,7 +34,7 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
         eprintln!(
-            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|open|open_eps|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_decode N"
+            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|open|open_eps|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_open|q8_decode N"
         );
         return ExitCode::from(2);
     };
@@ -108,6 +108,7 @@ fn quantized(table: &Shipped, head: &str, xs: &[[f32; 3]], os: &[f32], n: usize)
         "ml" => |q, c, o| q.ml(c, o),
         "map" => |q, c, o| q.map(c, o),
         "bayes" => |q, c, o| q.bayes(c, o),
+        "open" => |q, c, o| q.open(c, o),
         "decode" => {
             let mut ok = 0usize;
             for _ in 0..n {

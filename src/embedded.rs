@@ -23,8 +23,10 @@ include!(concat!(env!("OUT_DIR"), "/embedded_table.rs"));
 /// `tables/default_q8.mlmap`, the shipped table quantized to int8 codes with scale 0.08
 /// and zero point 0, written by `mlmap quantize`), validates its section with the code of
 /// [`QTable::from_bytes`](crate::QTable::from_bytes), and writes the section's bytes and
-/// a ready [`QTable`](crate::QTable) over them: no decoding at start-up. An invalid or
-/// missing section fails the build, naming the file.
+/// a ready [`QTable`](crate::QTable) over them: no decoding at start-up, every head of
+/// the section ready to score, the open head's parameters included when it has them
+/// ([`QTable::open`](crate::QTable::open)). An invalid or missing section fails the
+/// build, naming the file.
 ///
 /// ```
 /// use mlmap::embedded::quantized::{QUANTIZED, QUANTIZED_K};

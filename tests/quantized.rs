@@ -1,16 +1,40 @@
-//! The quantized table (`QTable`, docs/FORMAT.md "The quantized section"): its heads
-//! equal the `f32` heads on the dequantized logits bit for bit (every int8 code of every
-//! class; int16 codes sampled and at the range ends; random tables and parameters), the
-//! section's size, the table file with a section appended, and every malformed section
-//! refused with its error and never a panic.
+//! The quantized table (`QTable`, docs/FORMAT.md "The quantized section"): its heads,
+//! the open head included, equal the `f32` heads on the dequantized logits bit for bit
+//! (every int8 code of every class; int16 codes sampled and at the range ends; random
+//! tables and parameters), the section's size and layout (version 1 without the open
+//! head, version 2 with it), the table file with a section appended, and every malformed
+//! section refused with its error and never a panic.
 
-use mlmap::invariants::{check_scores, Sum};
+use mlmap::invariants::{check_open_decision, check_scores, Sum};
 use mlmap::{
-    dequantize, quantize_into, quantized_len, Code, QField, QParams, QTable, QTableError,
-    QuantizeError, Scores, Table,
+    dequantize, quantize_into, quantized_len, Code, InferError, OpenParams, QField, QParams,
+    QTable, QTableError, QuantizeError, Scores, Table,
 };
 
-use crate::support::{fix_crc, shipped, small_bayes, small_bayes_nobg, small_clamp, SHIPPED_MLMAP};
+use crate::support::{
+    crc32, fix_crc, shipped, small_bayes, small_bayes_nobg, small_clamp, SmallBayes,
+    SmallBayesNoBg, SHIPPED_MLMAP,
+};
+
+/// The open head's golden table with a background category: K = 3, Bayes 4 bins, 4
+/// categories, T = 1.75, epsilon = 0.05.
+const SMALL_OPEN_MLMAP: &[u8] = include_bytes!("golden/layer/small_open.mlmap");
+/// The same without background, epsilon 0.
+const SMALL_OPEN_NOBG_MLMAP: &[u8] = include_bytes!("golden/layer/small_open_nobg.mlmap");
+
+fn small_open() -> SmallBayes {
+    SmallBayes::from_bytes(SMALL_OPEN_MLMAP).expect("golden table")
+}
+
+fn small_open_nobg() -> SmallBayesNoBg {
+    SmallBayesNoBg::from_bytes(SMALL_OPEN_NOBG_MLMAP).expect("golden table")
+}
+
+/// The bits of the open head's parameters, so that equality is exact (and `-inf`, the
+/// unknown's log-score for epsilon 0, compares as itself).
+fn open_bits(o: Option<OpenParams>) -> Option<[u32; 3]> {
+    o.map(|o| [o.temperature(), o.epsilon(), o.log_unknown()].map(f32::to_bits))
+}
 
 /// The quantized section of `t` for `params`.
 fn section<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
@@ -65,6 +89,35 @@ fn agree<const BM: usize, const BP: usize, const BB: usize, const C: usize, Q: C
                                 .unwrap();
                             assert_eq!(bits(s), want.map(f32::to_bits), "Bayes {}", what());
                         }
+                        if q.open_params().is_some() {
+                            // `Table::open` and `open_with` (through the view: the table
+                            // type may have no Bayes head at all).
+                            let f32_open = |libm: bool| {
+                                let mut want = [0.0f32; 3];
+                                let v = t.view();
+                                let r = if libm {
+                                    v.open_into::<mlmap::Libm>(&x, os, &mut want, &mut [0.0; C])
+                                } else {
+                                    v.open_into::<mlmap::FastMath>(&x, os, &mut want, &mut [0.0; C])
+                                };
+                                r.expect("valid detection");
+                                want.map(f32::to_bits)
+                            };
+                            let s = q.open(&codes, os).expect("valid detection");
+                            assert_eq!(bits(Ok(s)), f32_open(false), "open {}", what());
+                            assert_eq!(
+                                bits(q.open_with::<mlmap::Libm>(&codes, os)),
+                                f32_open(true),
+                                "open (Libm) {}",
+                                what()
+                            );
+                            // DESIGN §1.8 without the f32 layer: within [0, OS], summing
+                            // to at most OS, and the detector's decision.
+                            check_scores(&s.0, os, Sum::AtMost).unwrap();
+                            check_open_decision(&s.0, &x).unwrap();
+                        } else {
+                            assert_eq!(q.open(&codes, os), Err(InferError::NoOpenHead));
+                        }
                         n += 1;
                     }
                 }
@@ -101,6 +154,10 @@ fn int8_everywhere<const BM: usize, const BP: usize, const BB: usize, const C: u
         let bytes = section(t, &p);
         let q = QTable::<3, i8>::from_bytes(&bytes).expect("a built section is valid");
         assert_eq!(q.has_bayes(), BB > 0);
+        // The open head comes with the Bayes head when the table has it, with the very
+        // parameters (the unknown's log-score derived to the same bits).
+        assert_eq!(open_bits(q.open_params()), open_bits(t.open_params()));
+        assert_eq!(bytes[4], if t.open_params().is_some() { 2 } else { 1 });
         let n = agree(t, &q, (scales, zps), &all, &others);
         assert_eq!(n, 3 * 256 * 36 * 2);
     }
@@ -118,6 +175,81 @@ fn int8_equals_f32_layer_for_every_code_small_tables() {
     int8_everywhere(&small_clamp());
     int8_everywhere(&small_bayes());
     int8_everywhere(&small_bayes_nobg());
+}
+
+#[test]
+fn int8_open_head_equals_f32_layer_for_every_code() {
+    // A non-zero epsilon with background (T = 1.75, epsilon = 0.05), and epsilon 0
+    // without background (the temperature layer). The shipped table (epsilon 0 with
+    // background) is in `int8_equals_f32_layer_for_every_code_shipped`.
+    let t = small_open();
+    let o = t.open_params().unwrap();
+    assert_eq!((o.temperature(), o.epsilon()), (1.75, 0.05));
+    int8_everywhere(&t);
+    int8_everywhere(&small_open_nobg());
+}
+
+/// A scale so large that most dequantized logits overflow to infinity: the open head's
+/// softmax takes them as its limit, and the quantized head still equals the `f32` one.
+#[test]
+fn int8_open_head_with_infinite_dequantized_logits() {
+    let t = small_open();
+    let (scales, zps) = ([3e38f32, 1e38, 2e37], [0i32, -1, 5]);
+    let p = QParams {
+        bits: 8,
+        scales: &scales,
+        zero_points: &zps,
+        bayes: true,
+    };
+    let bytes = section(&t, &p);
+    let q = QTable::<3, i8>::from_bytes(&bytes).unwrap();
+    assert_eq!(
+        q.logits(&[2, -128, 127])[..2],
+        [f32::INFINITY, f32::NEG_INFINITY]
+    );
+    let all: Vec<i8> = (i8::MIN..=i8::MAX).collect();
+    agree(&t, &q, (scales, zps), &all, &[-128, -1, 0, 1, 127]);
+}
+
+/// With epsilon 0 and no background, the quantized open head is the temperature layer
+/// of DESIGN §1.4 on the dequantized logits, bit for bit (DESIGN §1.8's invariant); with
+/// epsilon > 0 every score is below it.
+#[test]
+fn int8_open_head_is_the_temperature_layer_at_epsilon_zero() {
+    let nobg = small_open_nobg();
+    let with = small_open();
+    let p = |bits| QParams {
+        bits,
+        scales: &[0.05, 0.04, 0.06],
+        zero_points: &[3, -7, 0],
+        bayes: true,
+    };
+    let (a, b) = (section(&nobg, &p(8)), section(&with, &p(8)));
+    let (qa, qb) = (
+        QTable::<3, i8>::from_bytes(&a).unwrap(),
+        QTable::<3, i8>::from_bytes(&b).unwrap(),
+    );
+    let temperature = |t: f32, x: &[f32; 3], os| {
+        mlmap::baseline::temperature::<mlmap::FastMath, 3>(x, t, os)
+            .unwrap()
+            .0
+    };
+    let (ta, tb) = (
+        qa.open_params().unwrap().temperature(),
+        qb.open_params().unwrap().temperature(),
+    );
+    for c0 in (-128..=127).step_by(3) {
+        for c1 in (-128..=127).step_by(11) {
+            let codes = [c0 as i8, c1 as i8, (c0 ^ c1) as i8];
+            let (xa, xb) = (qa.logits(&codes), qb.logits(&codes));
+            let os = 0.83;
+            assert_eq!(qa.open(&codes, os).unwrap().0, temperature(ta, &xa, os));
+            let s = qb.open(&codes, os).unwrap().0;
+            for (s, w) in s.iter().zip(temperature(tb, &xb, os)) {
+                assert!(*s <= w, "{codes:?}: {s} above the temperature layer's {w}");
+            }
+        }
+    }
 }
 
 #[test]
@@ -145,6 +277,19 @@ fn int16_equals_f32_layer_on_sampled_codes_and_range_ends() {
             .collect();
         agree(&t, &q, (scales, zps), &near, &[0]);
     }
+    // The open head with a non-zero epsilon and background.
+    let t = small_open();
+    let (scales, zps) = ([0.0004f32, 0.0002, 0.0003], [-50i32, 0, 2000]);
+    let p = QParams {
+        bits: 16,
+        scales: &scales,
+        zero_points: &zps,
+        bayes: true,
+    };
+    let bytes = section(&t, &p);
+    let q = QTable::<3, i16>::from_bytes(&bytes).unwrap();
+    assert!(q.open_params().is_some());
+    agree(&t, &q, (scales, zps), &sample, &others);
 }
 
 /// The size formula of docs/FORMAT.md, with the windows counted from the `f32` tables'
@@ -187,7 +332,92 @@ fn shipped_int8_section_size() {
     );
     let with_bayes = quantized_len(&t.view(), &QParams { bayes: true, ..p }).unwrap();
     assert!(with_bayes > n);
-    println!("shipped table, int8, scale 0.08: {n} bytes (ML, MAP), {with_bayes} with Bayes");
+    // The shipped table has the open head: it comes with the Bayes head, 12 bytes.
+    let without_open = mlmap::host::DynTable::from_table(&t).without_open();
+    let bayes_only = quantized_len(&without_open.view(), &QParams { bayes: true, ..p }).unwrap();
+    assert_eq!(with_bayes, bayes_only + 12);
+    println!(
+        "shipped table, int8, scale 0.08: {n} bytes (ML, MAP), {bayes_only} with Bayes, \
+         {with_bayes} with Bayes and open"
+    );
+}
+
+/// The layout of docs/FORMAT.md: a table with the open head gets a version-2 section,
+/// which is the version-1 section of the same table without the open head (the table
+/// CRC it names aside), with the version byte 2 and the open record (temperature,
+/// epsilon, the unknown log-score: `f32` LE each) between the log priors and the
+/// trailer.
+#[cfg(feature = "std")]
+#[test]
+fn open_record_layout() {
+    let with = mlmap::host::DynTable::from_table(&small_open());
+    let without = with.clone().without_open();
+    for bits in [8u8, 16] {
+        let p = QParams {
+            bits,
+            scales: &[0.05, 0.04, 0.06],
+            zero_points: &[3, -7, 0],
+            bayes: true,
+        };
+        let build = |t: &mlmap::host::DynTable| {
+            let mut buf = vec![0u8; quantized_len(&t.view(), &p).unwrap()];
+            quantize_into(&t.view(), &p, &mut buf).unwrap();
+            buf
+        };
+        let (v2, v1) = (build(&with), build(&without));
+        assert_eq!((v1[4], v2[4]), (1, 2));
+        assert_eq!(v2.len(), v1.len() + 12);
+        // The header: the same, but the version and the table CRC (each table's last
+        // four bytes).
+        assert_eq!(v1[..4], v2[..4]);
+        assert_eq!(v1[5..16], v2[5..16]);
+        assert_eq!(v2[16..20], SMALL_OPEN_MLMAP[SMALL_OPEN_MLMAP.len() - 4..]);
+        let plain = without.to_vec().unwrap();
+        assert_eq!(v1[16..20], plain[plain.len() - 4..]);
+        // The body, then the open record.
+        let body = v1.len() - 8;
+        assert_eq!(v1[20..body], v2[20..body]);
+        // The unknown's log-score: ln(0.05) + 3 ln(1/4 + lambda) in f64 (the table's
+        // f32 value within a few rounding steps).
+        let lambda = f64::from(with.bayes().unwrap().lambda());
+        let log_unknown = with.open().unwrap().log_unknown();
+        let want = 0.05f64.ln() + 3.0 * (0.25 + lambda).ln();
+        assert!(
+            (f64::from(log_unknown) - want).abs() < 1e-5,
+            "{log_unknown} vs {want}"
+        );
+        let record: Vec<u8> = [1.75f32, 0.05, log_unknown]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        assert_eq!(v2[body..body + 12], record[..]);
+        // The trailer: the length, then the CRC of everything before it.
+        let n = v2.len();
+        assert_eq!(v2[n - 8..n - 4], (n as u32).to_le_bytes());
+        assert_eq!(v2[n - 4..], crc32(&v2[..n - 4]).to_le_bytes());
+        // Both read; only version 2 has the open head.
+        let (q1, q2) = (
+            mlmap::host::DynQTable::from_bytes(&v1).unwrap(),
+            mlmap::host::DynQTable::from_bytes(&v2).unwrap(),
+        );
+        assert_eq!(q1.open_params(), None);
+        assert_eq!(open_bits(q2.open_params()), open_bits(with.open()));
+        let mut out = [0.0f32; 3];
+        assert_eq!(
+            q1.score_into(mlmap::Head::Open, &[0, 1, 2], 1.0, &mut out),
+            Err(InferError::NoOpenHead)
+        );
+        // Without the Bayes head there is no open head, and the section is version 1.
+        let no_bayes = QParams { bayes: false, ..p };
+        let mut buf = vec![0u8; quantized_len(&with.view(), &no_bayes).unwrap()];
+        let b = quantize_into(&with.view(), &no_bayes, &mut buf).unwrap();
+        assert_eq!(b[4], 1);
+        let q = mlmap::host::DynQTable::from_bytes(b).unwrap();
+        assert_eq!(
+            q.score_into(mlmap::Head::Open, &[0, 1, 2], 1.0, &mut out),
+            Err(InferError::NoOpenHead)
+        );
+    }
 }
 
 #[test]
@@ -212,6 +442,9 @@ fn scores_keep_the_invariants() {
                 }
                 // Background takes a share: the class scores sum to at most OS.
                 check_scores(&q.bayes(&codes, os).unwrap().0, os, Sum::AtMost).unwrap();
+                let open = q.open(&codes, os).unwrap().0;
+                check_scores(&open, os, Sum::AtMost).unwrap();
+                check_open_decision(&open, &q.logits(&codes)).unwrap();
             }
         }
     }
@@ -223,6 +456,7 @@ fn scores_keep_the_invariants() {
         assert_eq!(q.ml(&far, os), Err(mlmap::InferError::Objectness));
         assert_eq!(q.map(&far, os), Err(mlmap::InferError::Objectness));
         assert_eq!(q.bayes(&far, os), Err(mlmap::InferError::Objectness));
+        assert_eq!(q.open(&far, os), Err(mlmap::InferError::Objectness));
     }
     let no_bayes = section(
         &t,
@@ -235,6 +469,7 @@ fn scores_keep_the_invariants() {
     );
     let q = QTable::<3, i8>::from_bytes(&no_bayes).unwrap();
     assert_eq!(q.bayes(&far, 0.5), Err(mlmap::InferError::NoBayesHead));
+    assert_eq!(q.open(&far, 0.5), Err(mlmap::InferError::NoOpenHead));
 }
 
 #[test]
@@ -369,9 +604,15 @@ fn malformed_sections_are_refused_with_their_error() {
             Err(QTableError::Corrupted),
         ),
         (
-            patched(&sec, 4, &[2]),
-            Err(QTableError::UnsupportedVersion { found: 2 }),
+            patched(&sec, 4, &[3]),
+            Err(QTableError::UnsupportedVersion { found: 3 }),
         ),
+        (
+            patched(&sec, 4, &[0]),
+            Err(QTableError::UnsupportedVersion { found: 0 }),
+        ),
+        // Version 1 has no open record: its 12 bytes are left over.
+        (patched(&sec, 4, &[1]), Err(QTableError::Malformed)),
         (
             patched(&sec, 5, &[16]),
             Err(QTableError::ShapeMismatch {
@@ -434,10 +675,83 @@ fn malformed_sections_are_refused_with_their_error() {
         read(&patched(&sec, ml_masses_at, &0f32.to_le_bytes())),
         invalid(QField::Mass, 0)
     );
-    let prior_at = sec.len() - 8 - 16;
+    let open_at = sec.len() - 8 - 12;
+    let prior_at = open_at - 16;
     assert_eq!(
         read(&patched(&sec, prior_at + 12, &f32::INFINITY.to_le_bytes())),
         invalid(QField::LogTerm, 3)
+    );
+    // The open record: temperature, epsilon, the unknown log-score (the shipped table:
+    // epsilon 0, so -inf).
+    let record =
+        |at: usize| f32::from_le_bytes(sec[open_at + at..open_at + at + 4].try_into().unwrap());
+    assert_eq!(
+        (record(0), record(4), record(8)),
+        (1.0, 0.0, f32::NEG_INFINITY)
+    );
+    let open_cases: Vec<(usize, f32, QField)> = vec![
+        (0, 0.0, QField::Temperature),
+        (0, -1.0, QField::Temperature),
+        (0, f32::NAN, QField::Temperature),
+        (0, 2e6, QField::Temperature),
+        (0, 5e-7, QField::Temperature),
+        (4, -0.0, QField::Epsilon),
+        (4, -1e-3, QField::Epsilon),
+        (4, f32::from_bits(1), QField::Epsilon),
+        (4, 2e30, QField::Epsilon),
+        (4, f32::INFINITY, QField::Epsilon),
+        (4, f32::NAN, QField::Epsilon),
+        // An unknown category with epsilon 0, or none with epsilon > 0.
+        (8, 0.0, QField::LogUnknown),
+        (8, -1e30, QField::LogUnknown),
+        (8, f32::NAN, QField::LogUnknown),
+        (8, f32::INFINITY, QField::LogUnknown),
+        (4, 0.01, QField::LogUnknown),
+    ];
+    for (at, v, field) in open_cases {
+        assert_eq!(
+            read(&patched(&sec, open_at + at, &v.to_le_bytes())),
+            invalid(field, 0),
+            "offset {at}: {v:e}"
+        );
+    }
+    // Values in range are read as they are: the smallest and largest temperature and
+    // epsilon, each epsilon > 0 with a finite log-score (the values `quantize` writes
+    // are compared with the table's in `int8_open_head_equals_f32_layer_for_every_code`).
+    let read_open = |t: f32, e: f32, l: f32| {
+        let mut rec = Vec::new();
+        for v in [t, e, l] {
+            rec.extend_from_slice(&v.to_le_bytes());
+        }
+        QTable::<3, i8>::from_bytes(&patched(&sec, open_at, &rec))
+            .map(|q| open_bits(q.open_params()))
+    };
+    for (t, e, l) in [
+        (1e-6f32, 0.0, f32::NEG_INFINITY),
+        (1e6, 0.0, f32::NEG_INFINITY),
+        (1.0, f32::MIN_POSITIVE, -100.0),
+        (1.0, 1e30, 60.0),
+        (2.5, 0.3, -1e30),
+    ] {
+        assert_eq!(
+            read_open(t, e, l),
+            Ok(Some([t.to_bits(), e.to_bits(), l.to_bits()]))
+        );
+    }
+    // Version 2 needs the Bayes head: a section without it, marked version 2.
+    let no_bayes = section(
+        &shipped(),
+        &QParams {
+            bits: 8,
+            scales: &[0.08; 3],
+            zero_points: &[0; 3],
+            bayes: false,
+        },
+    );
+    assert_eq!(no_bayes[4], 1);
+    assert_eq!(
+        read(&patched(&no_bayes, 4, &[2])),
+        Err(QTableError::Malformed)
     );
     // Every truncation, and a byte added before the trailer.
     for n in 0..sec.len() {
@@ -455,20 +769,75 @@ fn malformed_sections_are_refused_with_their_error() {
     assert_eq!(read(&fix_crc(&longer)), Err(QTableError::Malformed));
 }
 
+/// The open record's temperature and epsilon are accepted exactly where the table
+/// accepts them (`DynTable::with_open`, the table decoder's rule): at, just inside and
+/// just outside every bound, and NaN, infinities and -0.
+#[cfg(feature = "std")]
+#[test]
+fn open_record_ranges_are_the_tables() {
+    let sec = shipped_section(8);
+    let open_at = sec.len() - 8 - 12;
+    let table = mlmap::host::DynTable::from_table(&shipped());
+    let up = |v: f32| f32::from_bits(v.to_bits() + 1);
+    let down = |v: f32| f32::from_bits(v.to_bits() - 1);
+    let (tmin, tmax, emax) = (
+        mlmap::MIN_TEMPERATURE,
+        mlmap::MAX_TEMPERATURE,
+        mlmap::MAX_EPSILON,
+    );
+    let odd = [
+        0.0f32,
+        -0.0,
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        -1.0,
+        f32::from_bits(1),
+    ];
+    let temperatures = [tmin, up(tmin), down(tmin), 1.0, tmax, up(tmax), down(tmax)];
+    let epsilons = [
+        f32::MIN_POSITIVE,
+        down(f32::MIN_POSITIVE),
+        0.5,
+        emax,
+        up(emax),
+        down(emax),
+    ];
+    let record = |t: f32, e: f32| {
+        // -inf with epsilon 0 (of either sign), a finite log-score otherwise.
+        let l = if e == 0.0 { f32::NEG_INFINITY } else { -1.0 };
+        let mut rec = Vec::new();
+        for v in [t, e, l] {
+            rec.extend_from_slice(&v.to_le_bytes());
+        }
+        QTable::<3, i8>::from_bytes(&patched(&sec, open_at, &rec)).is_ok()
+    };
+    for t in temperatures.iter().chain(&odd) {
+        let want = table.clone().with_open(*t, 0.0).is_ok();
+        assert_eq!(record(*t, 0.0), want, "temperature {t:e}");
+    }
+    for e in epsilons.iter().chain(&odd) {
+        let want = table.clone().with_open(1.0, *e).is_ok();
+        assert_eq!(record(1.0, *e), want, "epsilon {e:e} ({:#x})", e.to_bits());
+    }
+}
+
 /// Every byte of the section set to a few values, the CRC fixed: no panic, and any
 /// section that is accepted scores within the invariants.
 #[test]
 fn mutated_sections_never_panic() {
-    for bits in [8u8, 16] {
-        let sec = section(
-            &small_bayes(),
-            &QParams {
-                bits,
-                scales: &[0.1; 3],
-                zero_points: &[0; 3],
-                bayes: true,
-            },
-        );
+    for (bits, open) in [(8u8, false), (16, false), (8, true), (16, true)] {
+        let p = QParams {
+            bits,
+            scales: &[0.1; 3],
+            zero_points: &[0; 3],
+            bayes: true,
+        };
+        let sec = if open {
+            section(&small_open(), &p)
+        } else {
+            section(&small_bayes(), &p)
+        };
         let mut accepted = 0;
         for i in 0..sec.len() - 4 {
             for v in [0x00u8, 0x01, 0x7f, 0x80, 0xff, sec[i] ^ 0x10] {
@@ -483,6 +852,7 @@ fn mutated_sections_never_panic() {
                         check_scores(&q.ml(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
                         check_scores(&q.map(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
                         check_scores(&q.bayes(&codes, 1.0).unwrap().0, 1.0, Sum::AtMost).unwrap();
+                        check_open(&q.open(&codes, 1.0), open, &q.logits(&codes));
                     }
                 }
                 if let Ok(q) = b {
@@ -491,11 +861,26 @@ fn mutated_sections_never_panic() {
                         check_scores(&q.ml(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
                         check_scores(&q.map(&codes, 1.0).unwrap().0, 1.0, Sum::Equal).unwrap();
                         check_scores(&q.bayes(&codes, 1.0).unwrap().0, 1.0, Sum::AtMost).unwrap();
+                        check_open(&q.open(&codes, 1.0), open, &q.logits(&codes));
                     }
                 }
             }
         }
         assert!(accepted > 0);
+    }
+}
+
+/// An accepted mutated section scores the open head within DESIGN §1.8's invariants, or
+/// says it has none (a mutation cannot add the open head to a section without it: the
+/// version byte of a version-1 section set to 2 leaves the record missing).
+fn check_open(s: &Result<Scores<3>, InferError>, open: bool, x: &[f32; 3]) {
+    match s {
+        Ok(s) => {
+            assert!(open, "an open head in a section built without one");
+            check_scores(&s.0, 1.0, Sum::AtMost).unwrap();
+            check_open_decision(&s.0, x).unwrap();
+        }
+        Err(e) => assert_eq!((*e, open), (InferError::NoOpenHead, false)),
     }
 }
 
@@ -537,10 +922,10 @@ mod random {
         let x: Vec<f32> = (0..k)
             .map(|i| dequantize(codes[i], scales[i], zps[i]))
             .collect();
-        let heads: &[Head] = if t.bayes().is_some() {
-            &[Head::Ml, Head::Map, Head::Bayes]
-        } else {
-            &[Head::Ml, Head::Map]
+        let heads: &[Head] = match (t.bayes().is_some(), t.open().is_some()) {
+            (true, true) => &[Head::Ml, Head::Map, Head::Bayes, Head::Open],
+            (true, false) => &[Head::Ml, Head::Map, Head::Bayes],
+            _ => &[Head::Ml, Head::Map],
         };
         for &head in heads {
             for os in [1.0f32, 0.43] {
@@ -554,21 +939,50 @@ mod random {
                     want.iter().map(|v| v.to_bits()).collect(),
                 );
                 prop_assert_eq!(g, w, "{:?} codes {:?} x {:?}", head, codes, x);
-                let sum = if head == Head::Bayes && t.bayes().is_some_and(|b| b.has_background()) {
-                    Sum::AtMost
-                } else {
-                    Sum::Equal
+                let background = t.bayes().is_some_and(|b| b.has_background());
+                let sum = match head {
+                    Head::Open => Sum::AtMost,
+                    Head::Bayes if background => Sum::AtMost,
+                    _ => Sum::Equal,
                 };
                 check_scores(&got, os, sum).map_err(|v| TestCaseError::fail(v.to_string()))?;
+                if head == Head::Open {
+                    check_open_decision(&got, &x)
+                        .map_err(|v| TestCaseError::fail(v.to_string()))?;
+                }
             }
         }
         Ok(())
     }
 
+    /// The open head's parameters, or none (a version-2 table): temperatures across the
+    /// allowed range, epsilons 0, tiny, moderate and huge.
+    fn open() -> impl Strategy<Value = Option<(f32, f32)>> {
+        let decades = |lo: f64, hi: f64| (lo..hi).prop_map(|e| 10f64.powf(e) as f32);
+        let temperature = prop_oneof![
+            1 => Just(1.0f32),
+            1 => Just(mlmap::MIN_TEMPERATURE),
+            1 => Just(mlmap::MAX_TEMPERATURE),
+            4 => decades(-2.0, 2.0),
+        ];
+        let epsilon = prop_oneof![
+            2 => Just(0.0f32),
+            1 => Just(f32::MIN_POSITIVE),
+            1 => Just(mlmap::MAX_EPSILON),
+            4 => decades(-12.0, 6.0),
+        ];
+        prop::option::weighted(0.75, (temperature, epsilon))
+    }
+
     fn case() -> impl Strategy<Value = (DynTable, (u8, Vec<f32>, Vec<i32>, u64))> {
         (2usize..=5, 1usize..=8, any::<bool>()).prop_flat_map(|(k, bins, background)| {
             (
-                dyn_table(k, bins, background).prop_map(|(_, t)| t),
+                (dyn_table(k, bins, background), open()).prop_map(|((_, t), open)| match open {
+                    Some((temperature, epsilon)) => t
+                        .with_open(temperature, epsilon)
+                        .expect("parameters in range"),
+                    None => t,
+                }),
                 quantization(k),
             )
         })
@@ -585,6 +999,8 @@ mod random {
             let bytes = quantize_into(&t.view(), &p, &mut buf).unwrap();
             let q = DynQTable::from_bytes(bytes).unwrap();
             prop_assert_eq!(q.k(), k);
+            prop_assert_eq!(open_bits(q.open_params()), open_bits(t.open()));
+            prop_assert_eq!(bytes[4], if t.open().is_some() { 2 } else { 1 });
             let (lo, hi) = mlmap::code_range(bits);
             let mut state = code_seed | 1;
             let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; state };
@@ -633,7 +1049,16 @@ fn shipped_quantized_file_and_embedded_section() {
     assert_eq!(&QUANTIZED_SECTION[..], &file[SHIPPED_MLMAP.len()..]);
     let read = QTable::<3, i8>::from_bytes(file).unwrap();
     assert_eq!(QUANTIZED, read);
+    // The shipped table's open head (T = 1, epsilon = 0), in the file and embedded.
+    assert_eq!(file[SHIPPED_MLMAP.len() + 4], 2, "a version-2 section");
+    assert_eq!(
+        open_bits(QUANTIZED.open_params()),
+        open_bits(shipped().open_params())
+    );
     for codes in [[0i8, 0, 0], [50, -20, 10], [127, -128, 3]] {
         assert_eq!(QUANTIZED.bayes(&codes, 0.8), read.bayes(&codes, 0.8));
+        let x = read.logits(&codes);
+        assert_eq!(QUANTIZED.open(&codes, 0.8), read.open(&codes, 0.8));
+        assert_eq!(QUANTIZED.open(&codes, 0.8), shipped().open(&x, 0.8));
     }
 }

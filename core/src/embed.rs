@@ -115,6 +115,7 @@ pub const fn qmeta(
     table_crc: u32,
     lambdas: [f32; 3],
     log_prior: &'static [[u8; 4]],
+    open: Option<OpenParams>,
     len: usize,
 ) -> Meta<'static> {
     Meta {
@@ -128,6 +129,7 @@ pub const fn qmeta(
         lambda_map: lambdas[1],
         log_lambda: lambdas[2],
         log_prior,
+        open,
         len,
     }
 }

@@ -31,6 +31,20 @@ fn hist(h: &Histogram<Vec<f32>>) -> String {
     )
 }
 
+/// The open head's parameters as an expression: `E::open(..)` with the validated
+/// values, bit for bit, or `None`.
+fn open_source(open: Option<crate::OpenParams>) -> String {
+    match open {
+        Some(o) => format!(
+            "E::open({}, {}, {})",
+            f(o.temperature()),
+            f(o.epsilon()),
+            f(o.log_unknown())
+        ),
+        None => "None".into(),
+    }
+}
+
 /// Rust source defining `K`, `BINS_ML`, `BINS_MAP`, `BINS_BAYES`, `CATEGORIES`,
 /// `EmbeddedTable`, `SOURCE`, `BYTES` and `TABLE` for the table `t` decoded from
 /// `bytes` (read from `source`). `krate` is the path the source names this crate by.
@@ -101,15 +115,7 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
         UpperTail::Zero => "Zero",
         UpperTail::Clamp => "Clamp",
     };
-    let open = match v.open() {
-        Some(o) => format!(
-            "E::open({}, {}, {})",
-            f(o.temperature()),
-            f(o.epsilon()),
-            f(o.log_unknown())
-        ),
-        None => "None".into(),
-    };
+    let open = open_source(v.open());
     let (axes, terms, brows, log_prior, lambda, log_lambda) = match bayes {
         Some(b) => {
             let axes: Vec<String> = b
@@ -212,6 +218,7 @@ pub fn quantized_source(
     };
     let m = &q.meta;
     let code = if m.bits == 8 { "i8" } else { "i16" };
+    let open = open_source(m.open);
     let mut s = String::new();
     let _ = writeln!(s, "use {krate}::__embed as E;");
     let _ = writeln!(
@@ -273,7 +280,7 @@ pub fn quantized_source(
         s,
         "/// The embedded quantized section, validated at build time: no decoding at start-up.\n\
          pub static QUANTIZED: EmbeddedQTable = E::qtable(\n    \
-         E::qmeta({}, {}, {}, {}, {}, 0x{:08x}, [{}, {}, {}], {}, {}),\n    [{}],\n    [{}],\n);",
+         E::qmeta({}, {}, {}, {}, {}, 0x{:08x}, [{}, {}, {}], {}, {open}, {}),\n    [{}],\n    [{}],\n);",
         m.bits,
         m.k,
         m.bins_ml,

@@ -1,5 +1,5 @@
-//! The quantized table: the ML, MAP and Bayes heads for detectors whose heads emit int8
-//! or int16 logits (docs/FORMAT.md, "The quantized section").
+//! The quantized table: the ML, MAP, Bayes and open heads for detectors whose heads emit
+//! int8 or int16 logits (docs/FORMAT.md, "The quantized section").
 //!
 //! A quantized logit `q` of class `c` stands for the dequantized logit
 //!
@@ -15,8 +15,8 @@
 //! functions the `f32` layer runs. Inference is then K lookups and the layer's own
 //! normalisation, with no `exp` for ML and MAP: the scores are **bit for bit** those of
 //! [`Table::ml`](crate::Table::ml), [`Table::map`](crate::Table::map) (its default
-//! `Libm` backend) and [`Table::bayes_with`](crate::Table::bayes_with) applied to the
-//! dequantized logits.
+//! `Libm` backend), [`Table::bayes_with`](crate::Table::bayes_with) and
+//! [`Table::open_with`](crate::Table::open_with) applied to the dequantized logits.
 //!
 //! The section stays in its bytes (flash on a device): [`QTable`] is a validated view
 //! over them. [`QTable::from_bytes`] checks the checksum and every invariant once;
@@ -32,19 +32,32 @@
 //! * Bayes (optional): per logit a code-to-bin index over the codes inside the logit's
 //!   axis, and that logit's rows of log-terms; outside the axis a logit adds
 //!   `ln(lambda)`, as in the `f32` head.
+//! * Open (optional, with the Bayes head; section version 2): the temperature, `epsilon`
+//!   and the unknown category's log-score as the table decoder derived it. The head's
+//!   log-scores are the Bayes head's, and its softmax runs on the dequantized logits
+//!   (DESIGN §1.8).
 
 use crate::bayes;
 use crate::error::{Head, InferError};
 use crate::layer::{self, Scores};
 use crate::math::Backend;
-use crate::view::BayesBackend;
+use crate::open::{self, OpenParams};
+use crate::view::{BayesBackend, OpenBackend};
 use crate::wire::CRC_CHECK;
 
 /// The four bytes a quantized section starts with.
 pub const QUANTIZED_MAGIC: [u8; 4] = *b"MLMQ";
 
-/// The quantized section's format version this build reads and writes.
-pub const QUANTIZED_VERSION: u8 = 1;
+/// The newest quantized-section version: this build writes it for sections with the open
+/// head (DESIGN §1.8), and reads it and version 1 (a section without the open head, which
+/// is always written as version 1).
+pub const QUANTIZED_VERSION: u8 = 2;
+
+/// The version of sections without the open head.
+pub(crate) const QUANTIZED_VERSION_1: u8 = 1;
+
+/// Bytes of the open head's record (version 2): temperature, epsilon, unknown log-score.
+pub(crate) const OPEN_LEN: usize = 12;
 
 /// Bytes of the fixed header of a quantized section.
 pub(crate) const HEADER_LEN: usize = 32;
@@ -178,6 +191,15 @@ pub enum QField {
     /// A Bayes log-term, log prior or `ln(lambda)` is not finite with magnitude at most
     /// [`MAX_LOG_TERM`].
     LogTerm,
+    /// The open head's temperature is not in
+    /// [`[MIN_TEMPERATURE, MAX_TEMPERATURE]`](crate::MIN_TEMPERATURE).
+    Temperature,
+    /// The open head's `epsilon` is not 0 and not in
+    /// `[f32::MIN_POSITIVE, `[`MAX_EPSILON`](crate::MAX_EPSILON)`]`.
+    Epsilon,
+    /// The open head's unknown log-score is not `-inf` with `epsilon` 0, or not finite
+    /// with `epsilon` > 0.
+    LogUnknown,
 }
 
 impl QField {
@@ -192,6 +214,11 @@ impl QField {
             Self::Index => "bin index (not below the bin count)",
             Self::Mass => "mass (not finite and positive)",
             Self::LogTerm => "Bayes log-term (not finite and small)",
+            Self::Temperature => "open head's temperature (out of range)",
+            Self::Epsilon => "open head's epsilon (neither 0 nor in range)",
+            Self::LogUnknown => {
+                "open head's unknown log-score (not -inf for epsilon 0, or not finite)"
+            }
         }
     }
 }
@@ -203,7 +230,7 @@ impl core::fmt::Display for QTableError {
             Self::Corrupted => f.write_str("quantized section checksum does not match its contents"),
             Self::UnsupportedVersion { found } => write!(
                 f,
-                "quantized section version {found} is not supported (this build reads version {QUANTIZED_VERSION})"
+                "quantized section version {found} is not supported (this build reads versions {QUANTIZED_VERSION_1} to {QUANTIZED_VERSION})"
             ),
             Self::ShapeMismatch { expected, found } => write!(
                 f,
@@ -282,6 +309,8 @@ pub struct Meta<'a> {
     pub(crate) log_lambda: f32,
     /// C log priors, `f32` LE (empty without a Bayes head).
     pub(crate) log_prior: &'a [[u8; 4]],
+    /// The open head's parameters (version 2), `None` without that head.
+    pub(crate) open: Option<OpenParams>,
     /// Length of the section, trailer included.
     pub(crate) len: usize,
 }
@@ -423,9 +452,11 @@ pub(crate) fn parse<'a>(
     let mut r = Reader(section.get(..body_len).unwrap_or(&[]));
     let _magic = r.take(4)?;
     let version = r.u8()?;
-    if version != QUANTIZED_VERSION {
+    if !(version == QUANTIZED_VERSION_1 || version == QUANTIZED_VERSION) {
         return Err(QTableError::UnsupportedVersion { found: version });
     }
+    // Version 2 is the version of sections with the open head, which needs the Bayes head.
+    let has_open = version == QUANTIZED_VERSION;
     let bits = r.u8()?;
     let flags = r.u8()?;
     let reserved = r.u8()?;
@@ -437,7 +468,7 @@ pub(crate) fn parse<'a>(
     let lambda_ml = r.f32()?;
     let lambda_map = r.f32()?;
     let log_lambda = r.f32()?;
-    if reserved != 0 || flags > 1 {
+    if reserved != 0 || flags > 1 || (has_open && flags != 1) {
         return Err(QTableError::Malformed);
     }
     let has_bayes = flags == 1;
@@ -554,6 +585,36 @@ pub(crate) fn parse<'a>(
             }
         }
     }
+    let mut open = None;
+    if has_open {
+        let (t, e, l) = (r.u32()?, r.u32()?, r.u32()?);
+        // The ranges of `OpenParams::new`, checked on the bits (which take less code on
+        // a device than the float comparisons): a positive `f32` orders as its bits, and
+        // NaN, negative values (-0 included) and infinities fall outside.
+        let bits = |v: f32| v.to_bits();
+        if !(bits(crate::MIN_TEMPERATURE)..=bits(crate::MAX_TEMPERATURE)).contains(&t) {
+            return Err(invalid(QField::Temperature, 0));
+        }
+        if !(e == 0 || (bits(f32::MIN_POSITIVE)..=bits(crate::MAX_EPSILON)).contains(&e)) {
+            return Err(invalid(QField::Epsilon, 0));
+        }
+        // As `OpenParams::new` derives it: -inf exactly when there is no unknown
+        // category, finite otherwise. (Its value is the writer's, as every precomputed
+        // value of the section: deriving it here would need `ln` on the device.)
+        let finite = l & 0x7f80_0000 != 0x7f80_0000;
+        if !(if e == 0 {
+            l == bits(f32::NEG_INFINITY)
+        } else {
+            finite
+        }) {
+            return Err(invalid(QField::LogUnknown, 0));
+        }
+        open = Some(OpenParams {
+            temperature: f32::from_bits(t),
+            epsilon: f32::from_bits(e),
+            log_unknown: f32::from_bits(l),
+        });
+    }
     if !r.0.is_empty() {
         return Err(QTableError::Malformed);
     }
@@ -568,6 +629,7 @@ pub(crate) fn parse<'a>(
         lambda_map,
         log_lambda,
         log_prior,
+        open,
         len: section.len(),
     })
 }
@@ -642,6 +704,50 @@ impl<'a> QView<'_, 'a> {
         if self.logits.is_empty() {
             return Err(InferError::NoBayesHead);
         }
+        self.log_scores_into(codes, objectness, out, scratch)?;
+        bayes::softmax::<M>(scratch, objectness, out);
+        Ok(())
+    }
+
+    /// Open-head scores (DESIGN §1.8): the Bayes log-scores from the stored rows, then
+    /// the open head's normalisation on the dequantized logits, which `x` (K floats)
+    /// receives. `scratch` holds C floats.
+    #[inline(always)]
+    pub(crate) fn open_into<M: Backend>(
+        &self,
+        codes: impl Iterator<Item = i32> + Clone,
+        objectness: f32,
+        out: &mut [f32],
+        scratch: &mut [f32],
+        x: &mut [f32],
+    ) -> Result<(), InferError> {
+        let params = match (&self.meta.open, self.logits.is_empty()) {
+            (Some(p), false) => p,
+            _ => return Err(InferError::NoOpenHead),
+        };
+        if x.len() != out.len() {
+            return Err(InferError::Length);
+        }
+        self.log_scores_into(codes.clone(), objectness, out, scratch)?;
+        for ((x, c), q) in x.iter_mut().zip(self.classes).zip(codes) {
+            *x = dequantize(q, c.scale, c.zero_point);
+        }
+        open::score_from_log_scores::<M>(scratch, params, x, objectness, out);
+        Ok(())
+    }
+
+    /// The Bayes log-scores `l[c] = ln pi[c] + sum_j t[c][j][bin_j]` of one detection
+    /// into `scratch` (C floats), in the order of the `f32` head (the prior, then each
+    /// logit's row, left to right). Checks the objectness and the lengths of `out` and
+    /// `scratch` first.
+    #[inline(always)]
+    fn log_scores_into(
+        &self,
+        codes: impl Iterator<Item = i32>,
+        objectness: f32,
+        out: &[f32],
+        scratch: &mut [f32],
+    ) -> Result<(), InferError> {
         if !(0.0..=1.0).contains(&objectness) {
             return Err(InferError::Objectness);
         }
@@ -673,7 +779,6 @@ impl<'a> QView<'_, 'a> {
                 }
             }
         }
-        bayes::softmax::<M>(scratch, objectness, out);
         Ok(())
     }
 }
@@ -693,7 +798,8 @@ impl<'a> QView<'_, 'a> {
 /// `x_c = ((q_c - zero_point_c) as f32) * scale_c`: [`QTable::ml`] those of
 /// [`Table::ml`](crate::Table::ml), [`QTable::map`] those of
 /// [`Table::map`](crate::Table::map), [`QTable::bayes`] those of
-/// [`Table::bayes`](crate::Table::bayes).
+/// [`Table::bayes`](crate::Table::bayes), [`QTable::open`] those of
+/// [`Table::open`](crate::Table::open).
 ///
 /// # Examples
 ///
@@ -713,6 +819,7 @@ impl<'a> QView<'_, 'a> {
 /// assert_eq!(q.ml(&codes, 0.9)?, table.ml(&x, 0.9)?);
 /// assert_eq!(q.map(&codes, 0.9)?, table.map(&x, 0.9)?);
 /// assert_eq!(q.bayes(&codes, 0.9)?, table.bayes(&x, 0.9)?);
+/// assert_eq!(q.open(&codes, 0.9)?, table.open(&x, 0.9)?);
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -750,7 +857,8 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
                 .map_or(0, u16::from_le_bytes),
             section.get(5).copied().unwrap_or(0),
         );
-        if section.get(4) == Some(&QUANTIZED_VERSION) {
+        let version = section.get(4).copied().unwrap_or(0);
+        if version == QUANTIZED_VERSION_1 || version == QUANTIZED_VERSION {
             let expected = (u16::try_from(K).unwrap_or(u16::MAX), Q::BITS);
             if shape != expected {
                 return Err(QTableError::ShapeMismatch {
@@ -890,6 +998,57 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
         Ok(Scores(out))
     }
 
+    /// Open-head scores of one detection (DESIGN §1.8): as
+    /// [`Table::open`](crate::Table::open) (its `FastMath` backend) on the dequantized
+    /// logits, bit for bit. The log-scores come from the stored rows, as for
+    /// [`QTable::bayes`]; the softmax at the temperature runs on the dequantized logits.
+    ///
+    /// # Errors
+    ///
+    /// [`InferError::NoOpenHead`] for a section without the open head (a version-1
+    /// section); otherwise as [`QTable::ml`].
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    #[inline]
+    pub fn open(&self, codes: &[Q; K], objectness: f32) -> Result<Scores<K>, InferError> {
+        self.open_with::<OpenBackend>(codes, objectness)
+    }
+
+    /// Open-head scores of one detection with the `exp` of backend `M`: as
+    /// [`Table::open_with`](crate::Table::open_with) on the dequantized logits.
+    ///
+    /// # Errors
+    ///
+    /// As [`QTable::open`].
+    ///
+    /// # Panics
+    ///
+    /// Never.
+    #[inline]
+    pub fn open_with<M: Backend>(
+        &self,
+        codes: &[Q; K],
+        objectness: f32,
+    ) -> Result<Scores<K>, InferError> {
+        let (mut out, mut x) = ([0.0; K], [0.0; K]);
+        // As in `bayes_with`: C = K or K + 1 log-scores, each a length known at compile
+        // time.
+        let mut scratch = [[0.0f32; 2]; K];
+        let scratch = scratch.as_flattened_mut();
+        let codes = codes.iter().map(|q| q.value());
+        let view = self.view();
+        if usize::from(self.meta.categories) == K {
+            let scratch = scratch.get_mut(..K).ok_or(InferError::Length)?;
+            view.open_into::<M>(codes, objectness, &mut out, scratch, &mut x)?;
+        } else {
+            let scratch = scratch.get_mut(..K + 1).ok_or(InferError::Length)?;
+            view.open_into::<M>(codes, objectness, &mut out, scratch, &mut x)?;
+        }
+        Ok(Scores(out))
+    }
+
     /// The dequantized logits of `codes` ([`dequantize`] with each class's scale and zero
     /// point): what the scores are exact for, and what the tie-safe decision compares
     /// (`scores.decide(&q.logits(&codes))`, DESIGN §1.7), since classes may have
@@ -918,6 +1077,14 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
     #[inline]
     pub fn has_bayes(&self) -> bool {
         self.meta.categories > 0
+    }
+
+    /// The open head's parameters (DESIGN §1.8), when the section has that head: the
+    /// table's temperature, `epsilon` and unknown log-score, as the table decoder
+    /// derived them.
+    #[inline]
+    pub fn open_params(&self) -> Option<OpenParams> {
+        self.meta.open
     }
 
     /// The quantization of class `c`: `(scale, zero_point)`.

@@ -3,13 +3,16 @@
 //! Every stored value is computed by the `f32` layer's own functions on the dequantized
 //! logit of each code: the ML mass and the bin it comes from, the MAP mass (with the
 //! `Libm` backend of [`Table::map`](crate::Table::map)), and the Bayes head's bin per
-//! logit. So the quantized heads reproduce the `f32` heads bit for bit.
+//! logit. So the quantized heads reproduce the `f32` heads bit for bit. The open head
+//! (DESIGN §1.8) comes with the Bayes head whenever the table has it: its parameters are
+//! copied as the table decoder derived them.
 
 use crate::histogram::Histogram;
 use crate::layer;
 use crate::math::Libm;
 use crate::qtable::{
-    code_range, dequantize, index_width, HEADER_LEN, QUANTIZED_MAGIC, QUANTIZED_VERSION,
+    code_range, dequantize, index_width, HEADER_LEN, OPEN_LEN, QUANTIZED_MAGIC, QUANTIZED_VERSION,
+    QUANTIZED_VERSION_1,
 };
 use crate::view::TableView;
 use crate::wire::{self, CRC};
@@ -23,7 +26,8 @@ pub struct QParams<'p> {
     pub scales: &'p [f32],
     /// The zero point of each class's logits (K values, each in the code range).
     pub zero_points: &'p [i32],
-    /// Whether to include the Bayes head (the table must have one).
+    /// Whether to include the Bayes head (the table must have one). With it comes the
+    /// open head when the table has that too (the section is then version 2).
     pub bayes: bool,
 }
 
@@ -157,8 +161,16 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
     let settings = table.settings();
     let bins_ml = narrow(table.bins_ml());
     let (bins_bayes, cats) = bayes.map_or((0, 0), |b| (narrow(b.bins()), narrow(b.categories())));
+    // The open head rides with the Bayes head: version 2 exactly when it is there, so a
+    // section without it keeps the bytes of version 1.
+    let open = bayes.and_then(|b| b.open());
+    let version = if open.is_some() {
+        QUANTIZED_VERSION
+    } else {
+        QUANTIZED_VERSION_1
+    };
     out.put(&QUANTIZED_MAGIC)?;
-    out.put(&[QUANTIZED_VERSION, params.bits, u8::from(bayes.is_some()), 0])?;
+    out.put(&[version, params.bits, u8::from(bayes.is_some()), 0])?;
     for v in [narrow(k), bins_ml, bins_bayes, cats] {
         out.put(&v.to_le_bytes())?;
     }
@@ -217,6 +229,13 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
         for c in 0..b.categories() {
             out.put(&b.log_prior(c).unwrap_or(0.0).to_le_bytes())?;
         }
+    }
+    if let Some(o) = open {
+        let before = out.len;
+        for v in [o.temperature(), o.epsilon(), o.log_unknown()] {
+            out.put(&v.to_le_bytes())?;
+        }
+        debug_assert_eq!(out.len - before, OPEN_LEN);
     }
     let len = u32::try_from(out.len + 8).map_err(|_| QuantizeError::TooLarge)?;
     out.put(&len.to_le_bytes())?;

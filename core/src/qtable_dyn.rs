@@ -5,8 +5,9 @@
 use alloc::vec::Vec;
 
 use crate::error::{Head, InferError};
+use crate::open::OpenParams;
 use crate::qtable::{code_range, locate, parse, QClass, QLogit, QTableError, QView};
-use crate::view::BayesBackend;
+use crate::view::{BayesBackend, OpenBackend};
 
 /// A validated quantized section with a run-time number of classes and code width.
 ///
@@ -89,6 +90,11 @@ impl<'a> DynQTable<'a> {
         !self.logits.is_empty()
     }
 
+    /// The open head's parameters (DESIGN §1.8), when the section has that head.
+    pub fn open_params(&self) -> Option<OpenParams> {
+        self.meta.open
+    }
+
     /// Bins of the ML head.
     pub fn bins_ml(&self) -> usize {
         usize::from(self.meta.bins_ml)
@@ -133,14 +139,16 @@ impl<'a> DynQTable<'a> {
         ])
     }
 
-    /// Scores one detection with `head` (the Bayes head's softmax with the backend of
-    /// [`Table::bayes`](crate::Table::bayes)): `codes` and `out` hold K values.
+    /// Scores one detection with `head` (the Bayes and open heads' `exp` with the backend
+    /// of [`Table::bayes`](crate::Table::bayes) and [`Table::open`](crate::Table::open)):
+    /// `codes` and `out` hold K values.
     ///
     /// # Errors
     ///
     /// [`InferError::Length`] when `codes` or `out` do not have K entries;
     /// [`InferError::CodeRange`] for a code outside the section's code range;
-    /// [`InferError::Objectness`]; [`InferError::NoBayesHead`].
+    /// [`InferError::Objectness`]; [`InferError::NoBayesHead`];
+    /// [`InferError::NoOpenHead`].
     pub fn score_into(
         &self,
         head: Head,
@@ -168,7 +176,11 @@ impl<'a> DynQTable<'a> {
                 let mut scratch = alloc::vec![0.0f32; usize::from(self.meta.categories)];
                 view.bayes_into::<BayesBackend>(codes, objectness, out, &mut scratch)
             }
-            Head::Open => Err(InferError::NoOpenHead),
+            Head::Open => {
+                let mut scratch = alloc::vec![0.0f32; usize::from(self.meta.categories)];
+                let mut x = alloc::vec![0.0f32; self.k()];
+                view.open_into::<OpenBackend>(codes, objectness, out, &mut scratch, &mut x)
+            }
         }
     }
 }

@@ -352,6 +352,9 @@ fn a_quantized_table_is_still_a_table_and_inspect_shows_its_section() {
         "scale 0.05",
         "zero point -7",
         "Bayes",
+        // `fit` writes the open head with T = 1 and epsilon = 0; the section carries it.
+        "heads ML, MAP, Bayes, open",
+        "open head: temperature 1, epsilon 0, ln unknown -inf",
     ] {
         assert!(text.contains(needle), "{needle:?} not in:\n{text}");
     }
@@ -359,6 +362,9 @@ fn a_quantized_table_is_still_a_table_and_inspect_shows_its_section() {
     let q = &json["quantized"];
     assert_eq!(q["bits"], 8);
     assert_eq!(q["classes"][1]["zero_point"], -7);
+    assert_eq!(q["open"]["temperature"], 1.0);
+    assert_eq!(q["open"]["epsilon"], 0.0);
+    assert!(q["open"]["log_unknown"].is_null(), "-inf for epsilon 0");
     assert_eq!(
         q["bytes"].as_u64().unwrap() as usize + plain.len(),
         std::fs::read(d.join("q.mlmap")).unwrap().len()

@@ -188,13 +188,24 @@ fn window_text(w: Option<(i32, usize)>) -> String {
 /// The quantized section in text.
 fn quantized_text(s: &mut String, q: &DynQTable<'_>, names: &[&str]) {
     let _ = writeln!(s);
+    let open = q.open_params();
     let _ = writeln!(
         s,
-        "quantized  int{} codes, section {} bytes (CRC-32 verified), heads ML, MAP{}",
+        "quantized  int{} codes, section {} bytes (CRC-32 verified), heads ML, MAP{}{}",
         q.bits(),
         q.section_len(),
-        if q.has_bayes() { ", Bayes" } else { "" }
+        if q.has_bayes() { ", Bayes" } else { "" },
+        if open.is_some() { ", open" } else { "" }
     );
+    if let Some(o) = open {
+        let _ = writeln!(
+            s,
+            "  open head: temperature {}, epsilon {}, ln unknown {}",
+            o.temperature(),
+            o.epsilon(),
+            o.log_unknown()
+        );
+    }
     let _ = writeln!(
         s,
         "  codes stored per class (outside them: lambda, or ln lambda for Bayes)"
@@ -230,10 +241,19 @@ fn quantized_json(q: &DynQTable<'_>, names: &[&str]) -> serde_json::Value {
             })
         })
         .collect();
+    // `log_unknown` is -inf for epsilon = 0, which JSON cannot hold: null then.
+    let open = q.open_params().map(|o| {
+        serde_json::json!({
+            "temperature": o.temperature(),
+            "epsilon": o.epsilon(),
+            "log_unknown": o.log_unknown().is_finite().then_some(o.log_unknown()),
+        })
+    });
     serde_json::json!({
         "bits": q.bits(),
         "bytes": q.section_len(),
         "bayes": q.has_bayes(),
+        "open": open,
         "classes": classes,
     })
 }

@@ -42,8 +42,9 @@ pub struct QuantizeArgs {
     /// Bits per code: 8 (int8) or 16 (int16).
     #[arg(long, default_value_t = 8, value_name = "8|16")]
     pub bits: u8,
-    /// Leave the Bayes head out of the section (smaller; `apply --quantized` then
-    /// writes no Bayes columns).
+    /// Leave the Bayes head, and with it the open head, out of the section (smaller;
+    /// `apply --quantized` then writes no Bayes columns). Without this flag the section
+    /// holds every head the table has.
     #[arg(long)]
     pub no_bayes: bool,
     /// The file to write: the table, then its quantized section.
@@ -85,11 +86,16 @@ pub fn run(args: &QuantizeArgs) -> Result<()> {
     out.resize(table_len + n, 0);
     quantize_into(&view, &params, out.get_mut(table_len..).unwrap_or_default()).map_err(bad)?;
     // What was written reads back (the same checks as the device's).
-    DynQTable::from_bytes(&out).map_err(|e| {
+    let q = DynQTable::from_bytes(&out).map_err(|e| {
         CliError::internal(&args.output, format!("section does not read back: {e}"))
     })?;
+    let heads = match (q.has_bayes(), q.open_params().is_some()) {
+        (true, true) => "ML, MAP, Bayes, open",
+        (true, false) => "ML, MAP, Bayes",
+        _ => "ML, MAP",
+    };
     output::write_bytes_atomic(&args.output, &out)?;
-    output::print(&summary(args, &table, table_len, n, params.bayes))
+    output::print(&summary(args, &table, table_len, n, heads))
 }
 
 fn summary(
@@ -97,9 +103,8 @@ fn summary(
     table: &DynTable,
     table_len: usize,
     n: usize,
-    bayes: bool,
+    heads: &str,
 ) -> String {
-    let heads = if bayes { "ML, MAP, Bayes" } else { "ML, MAP" };
     format!(
         "wrote {}: table {table_len} bytes + quantized section {n} bytes \
          (int{} codes, {} classes, heads {heads})\n",
