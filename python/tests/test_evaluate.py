@@ -35,7 +35,8 @@ def test_equals_mlmap_eval_with_val_and_ood(table, data, cli, binning, flag):
     )
     # Every value, exactly: the JSON holds the shortest repr of each f64.
     assert got == want
-    assert list(got["methods"]) == ["sigmoid", "softmax", "temperature", "ml", "map", "bayes"]
+    assert list(got["methods"]) == ["sigmoid", "softmax", "temperature", "ml", "map", "bayes",
+                                    "open"]
 
 
 def test_equals_mlmap_eval_on_test_alone(table, data, cli):
