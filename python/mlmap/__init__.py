@@ -1,9 +1,19 @@
-"""mlmap: the ML, MAP and Bayes probability layers for object detectors, from Python.
+"""mlmap: the ML, MAP, Bayes and open probability layers for object detectors, from
+Python.
 
 A table is fitted from training logits (``mlmap.fit``), tuned on validation data
 (``mlmap.tune``), saved as a ``.mlmap`` file for the firmware (``Table.save``), and
 scores numpy arrays with the device's own ``f32`` code (``Table.ml``, ``Table.map``,
-``Table.bayes``). ``mlmap.evaluate`` reports every calibration metric of every method.
+``Table.bayes``, ``Table.open``). ``mlmap.evaluate`` reports every calibration metric of
+every method.
+
+The open head (docs/DESIGN.md section 1.8) keeps the detector's own softmax, at a
+temperature, and multiplies it by the probability that the detection is an object of a
+known class, learnt from the Bayes head's histograms: it ranks and decides as the
+detector does. ``mlmap.fit`` writes it untuned (temperature 1, epsilon 0);
+``mlmap.tune`` fits both on validation data. Rows that are known not to be objects of
+a class (logged false positives, classes the detector must not report) are given as
+``background=`` to ``fit``, ``tune``, ``FitStats`` and ``FitCounts``.
 
 Arrays: logits are ``(N, K)`` float32 or float64 (a PyTorch tensor via
 ``tensor.numpy()``); labels are ``(N,)`` integers, ``0 .. K-1`` a class (the table's
@@ -54,5 +64,6 @@ __all__ = [
 
 __version__ = "0.1.0"
 
-#: The heads a table may hold, by the names ``Table.scores`` and reports use.
-HEADS = ("ml", "map", "bayes")
+#: The heads a table may hold, by the names ``Table.scores`` and reports use, in the
+#: order of ``Table.heads``.
+HEADS = ("ml", "map", "bayes", "open")

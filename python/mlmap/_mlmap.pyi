@@ -8,7 +8,7 @@ import numpy.typing as npt
 
 FORMAT_VERSION: int
 
-HeadName = Literal["ml", "map", "bayes"]
+HeadName = Literal["ml", "map", "bayes", "open"]
 #: `(N, K)` float logits, or anything `numpy.asarray` turns into such an array. A
 #: C-contiguous, aligned float32 or float64 array is read in place; any other layout
 #: (Fortran order, strided, reversed or unaligned views, fields of structured arrays,
@@ -31,8 +31,8 @@ class TableError(ValueError):
 class Table:
     """A fitted mlmap table (any number of classes and bins), immutable.
 
-    Scoring runs the device's `f32` code on every row: the scores are bit for bit those
-    of the firmware and of `mlmap apply`.
+    Scoring (`ml`, `map`, `bayes`, `open`, `scores`) runs the device's `f32` code on
+    every row: the scores are bit for bit those of the firmware and of `mlmap apply`.
 
     A file with a quantized section (`mlmap quantize`) keeps it: the section is checked,
     described by `quantized`, and written back unchanged by `to_bytes`, `save` and
@@ -62,7 +62,8 @@ class Table:
         """Number of classes."""
     @property
     def heads(self) -> Tuple[str, ...]:
-        """`("ml", "map")` or `("ml", "map", "bayes")`."""
+        """`("ml", "map")`, `("ml", "map", "bayes")` or `("ml", "map", "bayes", "open")`
+        (format version 3)."""
     @property
     def bins_ml(self) -> int: ...
     @property
@@ -76,6 +77,10 @@ class Table:
     def lambda_map(self) -> float: ...
     @property
     def lambda_bayes(self) -> Optional[float]: ...
+    @property
+    def open_params(self) -> Optional[Dict[str, float]]:
+        """The open head's `{"temperature": T, "epsilon": epsilon}` (the stored `f32`
+        values); `None` without that head (a version-1 or version-2 table)."""
     @property
     def edges(self) -> Literal["linspace", "matlab"]: ...
     @property
@@ -100,13 +105,21 @@ class Table:
         self, head: Literal["ml", "map"], cls: Union[int, str]
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
         """`(edges, frequencies)` of a class's histogram: `B + 1` edges, `B` values.
-        A class index outside `0 .. K-1` raises `ValueError`."""
+        A class index outside `0 .. K-1`, or the head `"bayes"` or `"open"` (no
+        per-class histogram), raises `ValueError`."""
     def ml(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` ML scores; each row sums to its objectness."""
     def map(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` MAP scores; each row sums to its objectness."""
     def bayes(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
-        """`(N, K)` Bayes scores; each row sums to at most its objectness."""
+        """`(N, K)` Bayes scores; each row sums to at most its objectness. A table
+        without that head raises `ValueError`."""
+    def open(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
+        """`(N, K)` open-head scores, `OS * q * softmax(logits / T)`: the detector's
+        softmax at the table's temperature times the probability `q` that the
+        detection is of a known class; each row sums to at most its objectness and
+        ranks the classes as the logits do. A table without that head (version 1 or
+        2) raises `ValueError`."""
     def scores(
         self, head: HeadName, logits: Logits, objectness: Objectness = None
     ) -> npt.NDArray[np.float32]:
@@ -146,6 +159,7 @@ def fit(
     labels: Labels,
     objectness: Objectness = None,
     *,
+    background: Optional[Logits] = None,
     classes: Optional[Sequence[str]] = None,
     bins_ml: int = 22,
     lambda_ml: Optional[float] = None,
@@ -155,9 +169,13 @@ def fit(
     tail: Literal["zero", "clamp"] = "zero",
     bayes: BayesSetting = True,
 ) -> Table:
-    """Fits a table (the bytes `mlmap fit` writes on the same rows). Lambdas default to
-    0.0055 (ML) and 0.00012 (MAP); classes to `class0` .. `class{K-1}`. A bin count
-    outside `1 .. 65535` (negative ones too) raises `ValueError`."""
+    """Fits a table (the bytes `mlmap fit` writes on the same rows). `background` is
+    an `(N_b, K)` float array of more rows taken as background whatever they are (the
+    rows of `mlmap fit --background FILE`): they enter only the Bayes head's
+    `background` category, and so the open head. With the Bayes head the table holds
+    the untuned open head (temperature 1, epsilon 0). Lambdas default to 0.0055 (ML)
+    and 0.00012 (MAP); classes to `class0` .. `class{K-1}`. A bin count outside
+    `1 .. 65535` (negative ones too) raises `ValueError`."""
 
 def tune(
     logits: Logits,
@@ -166,6 +184,7 @@ def tune(
     objectness: Objectness = None,
     *,
     ood: Optional[Union[Logits, Sequence[Any]]] = None,
+    background: Optional[Logits] = None,
     classes: Optional[Sequence[str]] = None,
     objective: Literal["ece", "nll", "brier"] = "ece",
     bins_ml: Optional[Sequence[int]] = None,
@@ -185,8 +204,13 @@ def tune(
 ) -> Tuple[Table, Dict[str, Any]]:
     """Searches bins (default 4..40 per head) and lambdas on `val=(logits, labels[,
     objectness])`; returns the table and the report of `mlmap tune --format json`.
-    Bin counts outside `1 .. 65535`, `lambdas_per_decade` outside `1 .. 1000` and a
-    negative `top` raise `ValueError`."""
+    With the Bayes head it also tunes the open head: the temperature by NLL on the
+    labelled validation rows, then epsilon on `mlmap tune`'s grid (the report's
+    `"open"` candidates and `validation.methods.open` give both). `ood` joins the
+    validation rows as never-seen objects; `background` takes more training rows as
+    background, as in `fit`. Bin counts outside `1 .. 65535`, `lambdas_per_decade`
+    outside `1 .. 1000`, a negative `top` and a grid of too many candidates raise
+    `ValueError`."""
 
 @final
 class FitStats:
@@ -199,7 +223,10 @@ class FitStats:
         objectness: Objectness = None,
         *,
         classes: Optional[Sequence[str]] = None,
-    ) -> "FitStats": ...
+        background: Optional[Logits] = None,
+    ) -> "FitStats":
+        """The statistics of the rows, and of the rows `background` takes as background
+        (as `fit` takes them)."""
     @classmethod
     def empty(cls, classes: Sequence[str]) -> "FitStats": ...
     @property
@@ -246,8 +273,16 @@ class FitCounts:
     """Pass (b) of a fit over some rows; merges by addition, pickles."""
 
     def __new__(
-        cls, edges: FitEdges, logits: Logits, labels: Labels, objectness: Objectness = None
-    ) -> "FitCounts": ...
+        cls,
+        edges: FitEdges,
+        logits: Logits,
+        labels: Labels,
+        objectness: Objectness = None,
+        *,
+        background: Optional[Logits] = None,
+    ) -> "FitCounts":
+        """The counts of the rows over `edges`, and of the rows `background` takes as
+        background (give a shard the same rows as for its `FitStats`)."""
     @classmethod
     def empty(cls, edges: FitEdges) -> "FitCounts": ...
     @property

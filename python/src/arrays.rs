@@ -389,8 +389,10 @@ impl LabelColumn<'_> {
 }
 
 /// A label array held for the duration of a call: C-contiguous, aligned, of a native
-/// integer dtype (the caller's array, or numpy's one copy of it).
+/// integer dtype (the caller's array, or numpy's one copy of it), or labels made here.
 pub enum Labels<'py> {
+    /// Labels made by the package (`-1` for every row taken as background).
+    Owned(Vec<i8>),
     I64(PyReadonlyArray1<'py, i64>),
     I32(PyReadonlyArray1<'py, i32>),
     I16(PyReadonlyArray1<'py, i16>),
@@ -405,6 +407,7 @@ impl Labels<'_> {
     /// The labels as a column of exactly `n` values.
     pub fn column(&self, n: usize, what: &str) -> PyResult<LabelColumn<'_>> {
         Ok(match self {
+            Self::Owned(v) => LabelColumn::I8(whole(Ok(v.as_slice()), n, what)?),
             Self::I64(a) => LabelColumn::I64(whole(a.as_slice(), n, what)?),
             Self::I32(a) => LabelColumn::I32(whole(a.as_slice(), n, what)?),
             Self::I16(a) => LabelColumn::I16(whole(a.as_slice(), n, what)?),

@@ -4,13 +4,14 @@
 //! `fit` is the library's two passes over row ranges read by the rayon pool at the same
 //! time: pass (a) statistics per range, merged; the edges; pass (b) counts per range,
 //! merged; the table. The merges are exact, so the table's bytes do not depend on the
-//! split: they are those of `mlmap fit` on the same rows.
+//! split: they are those of `mlmap fit` on the same rows. Rows given as `background`
+//! are ranges of their own, every row labelled `-1` (`mlmap fit --background FILE`).
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use mlmap::host::dataset::{DataError, RowSource};
+use mlmap::host::dataset::{DataError, DataErrorKind, RowSource, MAX_CLASSES};
 use mlmap::host::fit::{
     self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitLabel, FitLogit, FitParams,
     FitStats, TrainingSet,
@@ -27,7 +28,7 @@ use rayon::prelude::*;
 use crate::arrays::{self, value_error, Count};
 use crate::errors::host_error;
 use crate::evaluate;
-use crate::source::{ArraySource, BlockSink};
+use crate::source::{ArraySource, BlockSink, Chained};
 use crate::table::PyTable;
 
 /// Rows per range of a parallel pass: below it, one range.
@@ -139,7 +140,7 @@ fn class_names(classes: Option<Vec<String>>, k: usize) -> PyResult<Vec<String>> 
     let names = match classes {
         Some(names) => names,
         // More columns than a table holds: refused before any name is made.
-        None if k > usize::from(u16::MAX) => {
+        None if k > MAX_CLASSES => {
             let e = DataError::new("classes", DataErrorKind::ClassCount { found: k });
             return Err(value_error(e.to_string()));
         }
@@ -168,12 +169,43 @@ fn check_class_names(names: &[String]) -> PyResult<()> {
     .map_err(|e| value_error(e.to_string()))
 }
 
+/// The rows of the `background` keyword: logits only, every row taken as background
+/// (label `-1`) whatever it is, as `mlmap fit --background FILE` takes a file's rows.
+struct Background<'py> {
+    logits: arrays::Logits<'py>,
+    labels: arrays::Labels<'py>,
+    objectness: arrays::Objectness<'py>,
+}
+
+impl<'py> Background<'py> {
+    /// `None` (no rows) or an `(N_b, K)` float array of any layout (DESIGN §6.20).
+    fn new(obj: Option<&Bound<'py, PyAny>>, k: usize) -> PyResult<Option<Self>> {
+        let Some(obj) = obj.filter(|o| !o.is_none()) else {
+            return Ok(None);
+        };
+        let x = arrays::logits(obj, "background")?;
+        if x.cols != k {
+            return Err(value_error(format!(
+                "background: has {} columns but the logits have {k}",
+                x.cols
+            )));
+        }
+        Ok(Some(Self {
+            labels: arrays::Labels::Owned(vec![-1; x.rows]),
+            logits: x,
+            // The objectness does not enter a fit.
+            objectness: arrays::Objectness::Const(1.0),
+        }))
+    }
+}
+
 /// The arrays of a fit, checked and held for one call.
 struct Held<'py> {
     classes: Vec<String>,
     logits: arrays::Logits<'py>,
     labels: arrays::Labels<'py>,
     objectness: arrays::Objectness<'py>,
+    background: Option<Background<'py>>,
 }
 
 impl<'py> Held<'py> {
@@ -182,35 +214,49 @@ impl<'py> Held<'py> {
         labels: &Bound<'py, PyAny>,
         objectness: Option<&Bound<'py, PyAny>>,
         classes: Option<Vec<String>>,
+        background: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Self> {
         let x = arrays::logits(logits, "logits")?;
         let classes = class_names(classes, x.cols)?;
         let labels = arrays::label_array(labels, "labels", x.rows)?;
         let objectness = arrays::objectness(objectness, "objectness", x.rows)?;
+        let background = Background::new(background, x.cols)?;
         Ok(Self {
             classes,
             logits: x,
             labels,
             objectness,
+            background,
         })
     }
 
-    fn source(&self) -> PyResult<ArraySource<'_>> {
-        ArraySource::new(
+    /// The training rows, then the rows taken as background (if any).
+    fn sources(&self) -> PyResult<Vec<ArraySource<'_>>> {
+        let mut out = vec![ArraySource::new(
             &self.classes,
             &self.logits,
             Some(&self.labels),
             &self.objectness,
             "",
-        )
+        )?];
+        if let Some(b) = &self.background {
+            let src =
+                ArraySource::new(&self.classes, &b.logits, Some(&b.labels), &b.objectness, "")?;
+            out.push(src.with_logits_name("background"));
+        }
+        Ok(out)
     }
 }
 
-/// Ranges for a parallel pass over `src`.
-fn parts<'a>(src: &ArraySource<'a>) -> Vec<ArraySource<'a>> {
+/// Ranges for a parallel pass over `srcs`, in order.
+fn parts<'a>(srcs: &[ArraySource<'a>]) -> Vec<ArraySource<'a>> {
     let threads = rayon::current_num_threads().max(1);
-    let n = (src.len() / MIN_ROWS_PER_PART).clamp(1, 4 * threads);
-    src.split(n)
+    srcs.iter()
+        .flat_map(|src| {
+            let n = (src.len() / MIN_ROWS_PER_PART).clamp(1, 4 * threads);
+            src.split(n)
+        })
+        .collect()
 }
 
 /// The first error in range order (the lowest row), or every value.
@@ -238,10 +284,10 @@ impl BlockSink for StatsSink {
     }
 }
 
-/// Pass (a) over `src`, in parallel.
-fn stats_of(src: &ArraySource<'_>) -> Result<FitStats, FitError> {
-    let classes = src.classes().to_vec();
-    let each = parts(src)
+/// Pass (a) over the rows of `srcs`, in parallel.
+fn stats_of(srcs: &[ArraySource<'_>]) -> Result<FitStats, FitError> {
+    let classes = Chained(srcs).classes().to_vec();
+    let each = parts(srcs)
         .par_iter()
         .map(|p| {
             let mut sink = StatsSink(FitStats::new(&classes));
@@ -261,10 +307,11 @@ fn stats_of(src: &ArraySource<'_>) -> Result<FitStats, FitError> {
     Ok(total)
 }
 
-/// Why pass (b) stopped: bad data, or a value outside the edges.
+/// Why pass (b) stopped: bad data, or a value outside the edges (in the array named,
+/// at the row given).
 enum CountError {
     Data(DataError),
-    Outside(u64),
+    Outside(PathBuf, u64),
 }
 
 impl From<DataError> for CountError {
@@ -288,7 +335,10 @@ impl BlockSink for CountsSink {
     ) -> Result<(), CountError> {
         match self.0.push_rows(logits, labels) {
             Ok(None) => Ok(()),
-            Ok(Some(i)) => Err(CountError::Outside((first + i) as u64)),
+            Ok(Some(i)) => Err(CountError::Outside(
+                src.path().to_path_buf(),
+                (first + i) as u64,
+            )),
             Err(_) => Err(CountError::Data(
                 src.first_error(first..first + labels.len()),
             )),
@@ -296,9 +346,9 @@ impl BlockSink for CountsSink {
     }
 }
 
-/// Pass (b) over `src`, in parallel.
-fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
-    let each = parts(src)
+/// Pass (b) over the rows of `srcs`, in parallel.
+fn counts_of(srcs: &[ArraySource<'_>], edges: &FitEdges) -> PyResult<FitCounts> {
+    let each = parts(srcs)
         .par_iter()
         .map(|p| {
             let mut sink = CountsSink(FitCounts::new(edges));
@@ -307,7 +357,7 @@ fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
                     if sink.0.push(&row) {
                         Ok(())
                     } else {
-                        Err(CountError::Outside(row.index))
+                        Err(CountError::Outside(p.path().to_path_buf(), row.index))
                     }
                 })?;
             }
@@ -317,9 +367,10 @@ fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
     let mut total = FitCounts::new(edges);
     for c in in_order(each).map_err(|e| match e {
         CountError::Data(e) => value_error(e.to_string()),
-        CountError::Outside(i) => value_error(format!(
-            "logits: row index {i}: a training value lies outside the edges; pass (b) needs \
-             the edges of statistics that include these rows"
+        CountError::Outside(path, i) => value_error(format!(
+            "{}: row index {i}: a training value lies outside the edges; pass (b) needs \
+             the edges of statistics that include these rows",
+            path.display()
         )),
     })? {
         total.merge(&c).map_err(|e| fit_error(&e))?;
@@ -332,22 +383,28 @@ fn counts_of(src: &ArraySource<'_>, edges: &FitEdges) -> PyResult<FitCounts> {
 ///
 /// `logits` is `(N, K)` float32 or float64 in any order; `labels` `(N,)` integers,
 /// `0..K-1` a class and `-1` background (used by the Bayes head; the paper's heads skip
-/// those rows); `objectness` is checked but does not enter the fit. `classes` names the
-/// columns (default `class0` ..). `bayes=True` fits the Bayes head with its defaults,
-/// `bayes={"bins": 22, "lambda": 1e-3}` with others, `None` or `False` leaves it out.
+/// those rows); `objectness` is checked but does not enter the fit. `background` is an
+/// `(N_b, K)` float array of more rows taken as background whatever they are (logged
+/// false positives, objects of classes the detector must not report), as `mlmap fit
+/// --background FILE` takes a file's rows: they teach the Bayes head's `background`
+/// category, and so the open head, what is not a known object. `classes` names the
+/// columns (default `class0` ..). `bayes=True` fits the Bayes head with its defaults
+/// and the untuned open head (`T = 1`, `epsilon = 0`), `bayes={"bins": 22, "lambda":
+/// 1e-3}` with others, `None` or `False` leaves both out.
 #[pyfunction]
-#[pyo3(signature = (logits, labels, objectness=None, *, classes=None, bins_ml=Count::new(22),
-                    lambda_ml=None, bins_map=Count::new(17), lambda_map=None, edges="linspace",
-                    tail="zero", bayes=BayesArg::DEFAULT),
-    text_signature = "(logits, labels, objectness=None, *, classes=None, bins_ml=22, \
-                      lambda_ml=None, bins_map=17, lambda_map=None, edges='linspace', \
-                      tail='zero', bayes=True)")]
+#[pyo3(signature = (logits, labels, objectness=None, *, background=None, classes=None,
+                    bins_ml=Count::new(22), lambda_ml=None, bins_map=Count::new(17),
+                    lambda_map=None, edges="linspace", tail="zero", bayes=BayesArg::DEFAULT),
+    text_signature = "(logits, labels, objectness=None, *, background=None, classes=None, \
+                      bins_ml=22, lambda_ml=None, bins_map=17, lambda_map=None, \
+                      edges='linspace', tail='zero', bayes=True)")]
 #[allow(clippy::too_many_arguments)]
 pub fn fit<'py>(
     py: Python<'py>,
     logits: &Bound<'py, PyAny>,
     labels: &Bound<'py, PyAny>,
     objectness: Option<&Bound<'py, PyAny>>,
+    background: Option<&Bound<'py, PyAny>>,
     classes: Option<Vec<String>>,
     bins_ml: Count,
     lambda_ml: Option<f64>,
@@ -358,8 +415,8 @@ pub fn fit<'py>(
     bayes: BayesArg,
 ) -> PyResult<PyTable> {
     let p = params(bins_ml, lambda_ml, bins_map, lambda_map, edges, tail, bayes)?;
-    let held = Held::new(logits, labels, objectness, classes)?;
-    let src = held.source()?;
+    let held = Held::new(logits, labels, objectness, classes, background)?;
+    let src = held.sources()?;
     let table = py.detach(|| -> PyResult<DynTable> {
         let stats = stats_of(&src).map_err(|e| fit_error(&e))?;
         let edges = stats.edges(&p).map_err(|e| fit_error(&e))?;
@@ -450,18 +507,20 @@ mergeable!(PyFitStats, FitStats, "FitStats");
 
 #[pymethods]
 impl PyFitStats {
-    /// The statistics of the rows of `logits`/`labels` (as `mlmap.fit` takes them).
+    /// The statistics of the rows of `logits`/`labels` and of the rows `background`
+    /// takes as background (as `mlmap.fit` takes them; `mlmap stats --background`).
     #[new]
-    #[pyo3(signature = (logits, labels, objectness=None, *, classes=None))]
+    #[pyo3(signature = (logits, labels, objectness=None, *, classes=None, background=None))]
     fn py_new<'py>(
         py: Python<'py>,
         logits: &Bound<'py, PyAny>,
         labels: &Bound<'py, PyAny>,
         objectness: Option<&Bound<'py, PyAny>>,
         classes: Option<Vec<String>>,
+        background: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Self> {
-        let held = Held::new(logits, labels, objectness, classes)?;
-        let src = held.source()?;
+        let held = Held::new(logits, labels, objectness, classes, background)?;
+        let src = held.sources()?;
         let inner = py.detach(|| stats_of(&src)).map_err(|e| fit_error(&e))?;
         Ok(Self { inner })
     }
@@ -482,7 +541,7 @@ impl PyFitStats {
         self.inner.classes().to_vec()
     }
 
-    /// Rows seen (labelled or not).
+    /// Rows seen (labelled or not, background rows included).
     #[getter]
     fn rows(&self) -> u64 {
         self.inner.rows()
@@ -584,19 +643,22 @@ mergeable!(PyFitCounts, FitCounts, "FitCounts");
 
 #[pymethods]
 impl PyFitCounts {
-    /// The counts of the rows of `logits`/`labels` over `edges`.
+    /// The counts over `edges` of the rows of `logits`/`labels` and of the rows
+    /// `background` takes as background (the same rows as their `FitStats`).
     #[new]
-    #[pyo3(signature = (edges, logits, labels, objectness=None))]
+    #[pyo3(signature = (edges, logits, labels, objectness=None, *, background=None))]
     fn py_new<'py>(
         py: Python<'py>,
         edges: &Bound<'py, PyFitEdges>,
         logits: &Bound<'py, PyAny>,
         labels: &Bound<'py, PyAny>,
         objectness: Option<&Bound<'py, PyAny>>,
+        background: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Self> {
         let edges = &edges.get().inner;
-        let held = Held::new(logits, labels, objectness, Some(edges.classes().to_vec()))?;
-        let src = held.source()?;
+        let classes = Some(edges.classes().to_vec());
+        let held = Held::new(logits, labels, objectness, classes, background)?;
+        let src = held.sources()?;
         let inner = py.detach(|| counts_of(&src, edges))?;
         Ok(Self { inner })
     }
@@ -634,15 +696,20 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
 
 /// Searches bins and lambdas of every head on validation data, as `mlmap tune` does;
 /// returns `(table, report)`, the report a dict as `mlmap tune --format json` (without
-/// the table's path).
+/// the table's path). With the Bayes head, the open head's temperature is fitted by NLL
+/// on the labelled validation rows and its `epsilon` searched on the grid of `mlmap
+/// tune`; the report's `"open"` candidates and its `validation.methods.open` carry
+/// both. `background` takes more training rows as background, as in `mlmap.fit`.
 #[pyfunction]
-#[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, classes=None,
+#[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, background=None,
+                    classes=None,
                     objective="ece", bins_ml=None, bins_map=None, bins_bayes=None,
                     bayes=true, lambda_min=1e-8, lambda_max=1.0,
                     lambdas_per_decade=Count::new(3),
                     lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
                     max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5)),
-    text_signature = "(logits, labels, val, objectness=None, *, ood=None, classes=None, \
+    text_signature = "(logits, labels, val, objectness=None, *, ood=None, background=None, \
+                      classes=None, \
                       objective='ece', bins_ml=None, bins_map=None, bins_bayes=None, \
                       bayes=True, lambda_min=1e-8, lambda_max=1.0, lambdas_per_decade=3, \
                       lambda_bayes_min=None, lambda_bayes_max=None, \
@@ -656,6 +723,7 @@ pub fn tune<'py>(
     val: &Bound<'py, PyAny>,
     objectness: Option<&Bound<'py, PyAny>>,
     ood: Option<&Bound<'py, PyAny>>,
+    background: Option<&Bound<'py, PyAny>>,
     classes: Option<Vec<String>>,
     objective: &str,
     bins_ml: Option<Vec<Count>>,
@@ -732,16 +800,16 @@ pub fn tune<'py>(
         ],
         lambdas,
         bayes: bayes_grid,
-        // The open head's epsilon grid, as `mlmap tune` searches it.
-        epsilons: mlmap::host::tune::epsilon_grid(),
+        epsilons: host_tune::epsilon_grid(),
         objective: Objective::from_name(objective).map_err(|e| value_error(e.to_string()))?,
         guards,
         edges: EdgeMode::from_name(edges).map_err(|e| value_error(e.to_string()))?,
         tail: UpperTail::from_name(tail).map_err(|e| value_error(e.to_string()))?,
         detail: top,
     };
-    let held = Held::new(logits, labels, objectness, classes)?;
-    let src = held.source()?;
+    params.check_size().map_err(value_error)?;
+    let held = Held::new(logits, labels, objectness, classes, background)?;
+    let src = held.sources()?;
     let names = held.classes.clone();
     let val = evaluate::data_set(&names, val, "val")?;
     let ood = ood
@@ -750,7 +818,7 @@ pub fn tune<'py>(
         .transpose()?;
     let (val_path, ood_path) = (Path::new("val"), Path::new("ood"));
     let tuned = py.detach(|| -> PyResult<_> {
-        let train = TrainingSet::read(&src).map_err(|e| fit_error(&e))?;
+        let train = TrainingSet::read(&Chained(&src)).map_err(|e| fit_error(&e))?;
         host_tune::tune(
             &train,
             &val,
@@ -809,6 +877,10 @@ fn tune_report<'py>(
             d.set_item("accuracy", c.accuracy)?;
             d.set_item("mean_ap", c.mean_ap)?;
             d.set_item("within_guards", c.eligible())?;
+            if let (Some(t), Some(e)) = (c.temperature, c.epsilon) {
+                d.set_item("temperature", t)?;
+                d.set_item("epsilon", e)?;
+            }
             d.set_item("rank", i + 1)?;
             list.append(d)?;
         }
@@ -828,6 +900,10 @@ fn tune_report<'py>(
         if let Some(ch) = &m.chosen {
             d.set_item("bins", ch.bins)?;
             d.set_item("lambda", ch.lambda)?;
+            if let (Some(t), Some(e)) = (ch.temperature, ch.epsilon) {
+                d.set_item("temperature", t)?;
+                d.set_item("epsilon", e)?;
+            }
             d.set_item("within_guards", m.excess == 0.0)?;
         }
         methods.set_item(m.method.name(), d)?;

@@ -69,8 +69,8 @@ fn score_chunk(
 ///
 /// # Errors
 ///
-/// The first row the layer refuses (a NaN logit, a bad objectness), or
-/// [`InferError::NoBayesHead`].
+/// The first row the layer refuses (a NaN logit, a bad objectness),
+/// [`InferError::NoBayesHead`] or [`InferError::NoOpenHead`].
 pub fn score(
     table: &DynTable,
     head: Head,
@@ -83,6 +83,12 @@ pub fn score(
         return Err(RowError {
             row: 0,
             error: InferError::NoBayesHead,
+        });
+    }
+    if head == Head::Open && table.open().is_none() {
+        return Err(RowError {
+            row: 0,
+            error: InferError::NoOpenHead,
         });
     }
     // One logit and one objectness per row and class, or nothing is scored.

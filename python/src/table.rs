@@ -23,8 +23,8 @@ use crate::score::{self, RowError};
 /// invariant, and a bad table raises `mlmap.TableError` (a `ValueError`) with the
 /// layer's message.
 ///
-/// Scoring (`ml`, `map`, `bayes`, `scores`) runs the device's `f32` code on every row,
-/// so the scores are bit for bit those of the firmware and of `mlmap apply`.
+/// Scoring (`ml`, `map`, `bayes`, `open`, `scores`) runs the device's `f32` code on
+/// every row, so the scores are bit for bit those of the firmware and of `mlmap apply`.
 ///
 /// A file with a quantized section (DESIGN §6.19, `mlmap quantize`) keeps it: the
 /// section is checked (its CRC and the table it names), described by `quantized`, and
@@ -75,6 +75,9 @@ impl PyTable {
         if self.table.bayes().is_some() {
             heads.push(Head::Bayes.name());
         }
+        if self.table.open().is_some() {
+            heads.push(Head::Open.name());
+        }
         heads
     }
 
@@ -100,7 +103,7 @@ impl PyTable {
         let (rows, col, table) = (x.rows()?, os.column()?, &self.table);
         let scored = py.detach(|| score::score(table, head, rows, col, n));
         let out = scored.map_err(|RowError { row, error }| match error {
-            InferError::NoBayesHead => value_error(error.to_string()),
+            InferError::NoBayesHead | InferError::NoOpenHead => value_error(error.to_string()),
             InferError::Objectness => value_error(format!("objectness: row index {row}: {error}")),
             _ => value_error(format!("logits: row index {row}: {error}")),
         })?;
@@ -111,7 +114,7 @@ impl PyTable {
 /// `(edges, frequencies)` of a histogram.
 type EdgesAndFrequencies<'py> = (Bound<'py, PyArray1<f32>>, Bound<'py, PyArray1<f32>>);
 
-/// A head by its name in reports (`ml`, `map`, `bayes`).
+/// A head by its name in reports (`ml`, `map`, `bayes`, `open`).
 pub fn parse_head(name: &str) -> PyResult<Head> {
     Head::from_name(name).map_err(|e| value_error(e.to_string()))
 }
@@ -164,7 +167,9 @@ impl PyTable {
         self.table.k()
     }
 
-    /// The heads the table holds: `("ml", "map")` or `("ml", "map", "bayes")`.
+    /// The heads the table holds, in the order of `mlmap.HEADS`: `("ml", "map")`,
+    /// `("ml", "map", "bayes")` or `("ml", "map", "bayes", "open")` (the open head is
+    /// built on the Bayes head; format version 3).
     #[getter]
     fn heads<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
         PyTuple::new(py, self.head_names())
@@ -204,6 +209,21 @@ impl PyTable {
     #[getter]
     fn lambda_bayes(&self) -> Option<f32> {
         self.table.bayes().map(|b| b.lambda())
+    }
+
+    /// The open head's parameters (DESIGN §1.8), the `f32` values the table stores:
+    /// `{"temperature": T, "epsilon": epsilon}`; `None` without that head (a version-1
+    /// or version-2 table). `mlmap fit` writes `T = 1` and `epsilon = 0`; `mlmap tune`
+    /// fits them on validation data.
+    #[getter]
+    fn open_params<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(o) = self.table.open() else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("temperature", o.temperature())?;
+        d.set_item("epsilon", o.epsilon())?;
+        Ok(Some(d))
     }
 
     /// How the fit placed the bin edges: `"linspace"` or `"matlab"`.
@@ -274,7 +294,8 @@ impl PyTable {
 
     /// The histogram of `head` (`"ml"` or `"map"`) for class `cls` (an index or a
     /// name): `(edges, frequencies)`, `B + 1` edges as the layer computes them (`f32`)
-    /// and `B` frequencies.
+    /// and `B` frequencies. The Bayes and open heads have no per-class histogram: they
+    /// raise `ValueError`.
     fn histogram<'py>(
         &self,
         py: Python<'py>,
@@ -288,6 +309,12 @@ impl PyTable {
                 return Err(value_error(
                     "the Bayes and open heads have one histogram per logit and category; \
                      histogram() takes \"ml\" or \"map\"",
+                ))
+            }
+            Head::Open => {
+                return Err(value_error(
+                    "the open head has no histogram of its own (it uses the Bayes head's, \
+                     one per logit and category); histogram() takes \"ml\" or \"map\"",
                 ))
             }
         };
@@ -338,7 +365,22 @@ impl PyTable {
         self.score_array(py, Head::Bayes, logits, objectness)
     }
 
-    /// The scores of `head` (`"ml"`, `"map"` or `"bayes"`), as `ml`.
+    /// Open-head scores of every row (DESIGN §1.8, as `ml`): `OS * q * softmax(z / T)`,
+    /// the detector's softmax at the table's temperature times the probability `q`
+    /// that the detection is of a known class, so a row sums to at most its
+    /// objectness and the classes rank as the logits do. Raises `ValueError` for a
+    /// table without that head (a version-1 or version-2 table).
+    #[pyo3(signature = (logits, objectness=None))]
+    fn open<'py>(
+        &self,
+        py: Python<'py>,
+        logits: &Bound<'py, PyAny>,
+        objectness: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray2<f32>>> {
+        self.score_array(py, Head::Open, logits, objectness)
+    }
+
+    /// The scores of `head` (`"ml"`, `"map"`, `"bayes"` or `"open"`), as `ml`.
     #[pyo3(signature = (head, logits, objectness=None))]
     fn scores<'py>(
         &self,
@@ -361,12 +403,20 @@ impl PyTable {
             ),
             None => format!("ml={}, map={}", self.table.bins_ml(), self.table.bins_map()),
         };
+        let open = match self.table.open() {
+            Some(o) => format!(
+                ", open=(temperature={:?}, epsilon={:?})",
+                o.temperature(),
+                o.epsilon()
+            ),
+            None => String::new(),
+        };
         let quantized = match self.quantized {
             Some((bits, ..)) => format!(", quantized=int{bits}"),
             None => String::new(),
         };
         format!(
-            "Table(classes=[{}], bins=({bins}), edges={:?}, size={}{quantized})",
+            "Table(classes=[{}], bins=({bins}){open}, edges={:?}, size={}{quantized})",
             classes.join(", "),
             self.edges(),
             self.bytes.len()

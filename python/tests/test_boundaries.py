@@ -226,16 +226,39 @@ def test_fit_stats_and_counts_in_every_layout_equal_the_contiguous_copy(small, l
                         mlmap.FitCounts(edges, v(x), v(y), v(os))).to_bytes() == want
 
 
+@pytest.mark.parametrize("layout", VARIANTS)
+def test_background_in_every_layout_equals_the_contiguous_copy(small, layout):
+    x, y, os = small["train"]
+    bg = small["ood"][0]
+    v = lambda a: variants(a)[layout]  # noqa: E731
+    for dt in (np.float64, np.float32):
+        b = bg.astype(dt)
+        want = mlmap.fit(x, y, os, classes=CLASSES, background=b)
+        assert want != mlmap.fit(x, y, os, classes=CLASSES)
+        assert mlmap.fit(x, y, os, classes=CLASSES, background=v(b)) == want, layout
+        stats = mlmap.FitStats(x, y, classes=CLASSES, background=v(b))
+        assert stats == mlmap.FitStats(x, y, classes=CLASSES, background=b)
+        edges = stats.edges()
+        counts = mlmap.FitCounts(edges, v(x), y, background=v(b))
+        assert counts == mlmap.FitCounts(edges, x, y, background=b)
+        assert mlmap.finish(stats, counts) == want
+
+
 @pytest.mark.parametrize("layout", ["unaligned", "field+1", "every-second-unaligned", "reversed",
                                     "fortran", "byteswapped"])
 def test_tune_in_every_layout_equals_the_contiguous_copy(small, layout):
     (x, y, os), (vx_, vy_, vos_), (ox, _, _) = small["train"], small["val"], small["ood"]
+    # Half of the never-seen objects join the validation rows, the other half the
+    # training rows as background.
+    ood, bg = ox[:150], ox[150:]
     grid = dict(classes=CLASSES, bins_ml=[8, 22], bins_map=[17], bins_bayes=[22], lambda_min=1e-4,
                 lambda_max=1e-2, lambdas_per_decade=1)
-    want_table, want_report = mlmap.tune(x, y, (vx_, vy_, vos_), os, ood=ox, **grid)
+    want_table, want_report = mlmap.tune(x, y, (vx_, vy_, vos_), os, ood=ood, background=bg,
+                                         **grid)
+    assert want_table.open_params is not None
     v = lambda a: variants(a)[layout]  # noqa: E731
-    got_table, got_report = mlmap.tune(v(x), v(y), (v(vx_), v(vy_), v(vos_)), v(os), ood=v(ox),
-                                       **grid)
+    got_table, got_report = mlmap.tune(v(x), v(y), (v(vx_), v(vy_), v(vos_)), v(os), ood=v(ood),
+                                       background=v(bg), **grid)
     assert got_table == want_table
     assert got_report == want_report
 
@@ -272,6 +295,13 @@ def test_bad_values_in_odd_layouts_raise_the_contiguous_copys_message(table):
                 mlmap.FitStats(b, y)
             with pytest.raises(ValueError, match=msg_score_x):
                 table.map(b)
+            with pytest.raises(ValueError, match=msg_score_x):
+                table.open(b)
+            # The same rows given as background: the message names that array.
+            with pytest.raises(ValueError, match="^background" + msg_fit_x[len("^logits"):]):
+                mlmap.fit(x, y, background=b)
+            with pytest.raises(ValueError, match="^background" + msg_fit_x[len("^logits"):]):
+                mlmap.FitCounts(mlmap.FitStats(x, y).edges(), x, y, background=b)
     edges = mlmap.FitStats(x, y).edges()
     for dt in (np.int64, np.int32, np.int16):
         for name, b in odd_layouts(bad_y.astype(dt)).items():
@@ -531,3 +561,10 @@ def test_large_arrays_in_odd_layouts_equal_the_contiguous_copy(table, data):
         table.ml(unaligned(bad))
     with pytest.raises(ValueError, match=r'^logits: row index 200000: column "pedestrian": "NaN"'):
         mlmap.fit(field(bad, 1), y, classes=CLASSES)
+    # As many rows given as background: split into ranges too, the bytes of the same
+    # rows labelled -1, and the first bad row of the background reported.
+    want_bg = mlmap.fit(np.concatenate([tr.logits, x]),
+                        np.concatenate([tr.labels, np.full(len(x), -1)]), classes=CLASSES)
+    assert mlmap.fit(tr.logits, tr.labels, classes=CLASSES, background=unaligned(x)) == want_bg
+    with pytest.raises(ValueError, match=r'^background: row index 200000: column "pedestrian"'):
+        mlmap.fit(tr.logits, tr.labels, classes=CLASSES, background=field(bad, 1))

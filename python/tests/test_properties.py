@@ -6,9 +6,11 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 import mlmap
-from conftest import DEFAULT_TABLE
+from conftest import DEFAULT_TABLE, ROOT
 
 TABLE = mlmap.Table.load(DEFAULT_TABLE)
+# An open head with a temperature and an unknown category (T = 1.75, epsilon = 0.05).
+OPEN_TABLE = mlmap.Table.load(ROOT / "tests" / "golden" / "layer" / "small_open.mlmap")
 
 # Logits around and beyond the training support, infinities included.
 logit = st.one_of(
@@ -41,6 +43,19 @@ def test_bayes_rows_are_in_range_and_sum_to_at_most_objectness(x, os):
     assert np.all(s >= 0.0) and np.all(s <= np.float32(os))
     # A background category takes its share: at most OS (within rounding).
     assert np.all(s.astype(np.float64).sum(axis=1) <= os * (1 + 1e-5) + 1e-7)
+
+
+@settings(max_examples=200, deadline=None)
+@given(x=matrices, os=objectness)
+def test_open_rows_are_in_range_and_decide_as_the_logits(x, os):
+    # DESIGN 1.8: scores in [0, OS], summing to at most OS; a positive multiple of
+    # softmax(z / T), so the decision is the detector's own.
+    for table in (TABLE, OPEN_TABLE):
+        s = table.open(x, os)
+        assert np.all(np.isfinite(s))
+        assert np.all(s >= 0.0) and np.all(s <= np.float32(os))
+        assert np.all(s.astype(np.float64).sum(axis=1) <= os * (1 + 1e-5) + 1e-7)
+        assert np.array_equal(mlmap.decide(s, x), mlmap.decide(x, x))
 
 
 @settings(max_examples=100, deadline=None)

@@ -151,7 +151,9 @@ def test_properties_equal_mlmap_inspect(table, inspect):
     info = inspect(DEFAULT_TABLE)
     assert table.classes == [c["name"] for c in info["classes"]] == CLASSES
     assert table.k == 3
-    assert table.heads == ("ml", "map", "bayes")
+    assert table.heads == ("ml", "map", "bayes", "open")
+    assert table.open_params == {"temperature": info["open"]["temperature"],
+                                 "epsilon": info["open"]["epsilon"]}
     assert (table.bins_ml, table.bins_map, table.bins_bayes) == (
         info["bins_ml"], info["bins_map"], info["bayes"]["bins"])
     assert table.lambda_ml == info["lambda_ml"] and table.lambda_map == info["lambda_map"]
@@ -168,6 +170,7 @@ def test_properties_equal_mlmap_inspect(table, inspect):
             by_name = table.histogram(head, c["name"])
             assert np.array_equal(by_name[0], edges)
     assert repr(table).startswith("Table(classes=['car', 'cyclist', 'pedestrian'], bins=(ml=22")
+    assert "open=(temperature=1.0, epsilon=0.0)" in repr(table)
 
 
 def test_histogram_refuses_bad_arguments(table):
@@ -223,9 +226,12 @@ def test_bayes_of_a_table_without_that_head(cli, tmp_path):
     cli("fit", "--train", "examples/data/train.csv", "--no-bayes", "--output", path)
     t = mlmap.Table.load(path)
     assert t.heads == ("ml", "map") and t.bins_bayes is None and t.categories is None
+    assert t.open_params is None
     with pytest.raises(ValueError, match="^the table has no Bayes head$"):
         t.bayes(np.zeros((1, 3)))
-    with pytest.raises(ValueError, match="^unknown head `softmax`: expected one of ml, map, bayes$"):
+    with pytest.raises(ValueError, match="^the table has no open head$"):
+        t.open(np.zeros((1, 3)))
+    with pytest.raises(ValueError, match="^unknown head `softmax`: expected one of ml, map, bayes, open$"):
         t.scores("softmax", np.zeros((1, 3)))
 
 
