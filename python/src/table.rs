@@ -305,9 +305,9 @@ impl PyTable {
         let hists = match parse_head(head)? {
             Head::Ml => self.table.ml_histograms(),
             Head::Map => self.table.map_histograms(),
-            Head::Bayes | Head::Open => {
+            Head::Bayes => {
                 return Err(value_error(
-                    "the Bayes and open heads have one histogram per logit and category; \
+                    "the Bayes head has one histogram per logit and category; \
                      histogram() takes \"ml\" or \"map\"",
                 ))
             }
