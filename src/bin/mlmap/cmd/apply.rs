@@ -42,9 +42,7 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
     // always, Bayes and open when present (the open head is built on the Bayes head).
     let mut heads = vec![Head::Ml, Head::Map];
     let section_has_bayes = quantized.as_ref().is_none_or(DynQTable::has_bayes);
-    let section_has_open = quantized
-        .as_ref()
-        .is_none_or(|q| q.open_params().is_some());
+    let section_has_open = quantized.as_ref().is_none_or(|q| q.open_params().is_some());
     if table.bayes().is_some() && section_has_bayes {
         heads.push(Head::Bayes);
         if table.open().is_some() && section_has_open {
