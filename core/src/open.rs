@@ -132,8 +132,13 @@ fn known_share<M: Backend>(l: &[f32], k: usize, log_unknown: f32) -> f32 {
             rest += e;
         }
     }
-    // exp(-inf) = 0: no unknown category when epsilon = 0.
-    let unknown = M::exp(log_unknown - max);
+    // No unknown category when epsilon = 0 (`log_unknown = -inf`): its term is 0, which
+    // is what exp(-inf) gives, without the call.
+    let unknown = if log_unknown == f32::NEG_INFINITY {
+        0.0
+    } else {
+        M::exp(log_unknown - max)
+    };
     // `known + rest >= 1` (the largest category contributes 1), so the denominator is
     // never 0, and `known <= known + rest <= denominator` keeps q in [0, 1].
     known / ((known + rest) + unknown)
