@@ -1008,7 +1008,17 @@ pub unsafe extern "C" fn mlmap_open(
     out_len: usize,
 ) -> mlmap_status_t {
     // SAFETY: as for `mlmap_ml`.
-    status(unsafe { detection(Head::Open, table, logits, n_logits, objectness, out, out_len) })
+    status(unsafe {
+        detection(
+            Head::Open,
+            table,
+            logits,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+        )
+    })
 }
 
 /// Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
