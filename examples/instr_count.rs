@@ -8,7 +8,7 @@
 //!
 //! Kinds: `sigmoid`, `softmax`, `ml`, `map`, `map_fast` (MAP with the `FastMath`
 //! backend), `map_micromath` (MAP with `Micromath`), `bayes` and `bayes_fast` (the Bayes head with
-//! `Libm` and `FastMath`), `sigmoid_fast` (the Sigmoid layer
+//! `Libm` and `FastMath`), `open` (the open head, `Table::open`), `sigmoid_fast` (the Sigmoid layer
 //! with `FastMath`), `q8_ml`, `q8_map`, `q8_bayes` (the quantized table, int8 codes
 //! `round(x / 0.08)` of the same rows), `q8_noop` (the loop around the quantized
 //! kinds), `q8_decode` (`QTable::from_bytes` of the section), `decode`, and `noop` (a layer that only copies the logits: the cost
@@ -32,7 +32,7 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
         eprintln!(
-            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_decode N"
+            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|open|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_decode N"
         );
         return ExitCode::from(2);
     };
@@ -52,6 +52,7 @@ fn main() -> ExitCode {
         "map_micromath" => |t, x, o| t.map_with::<Micromath>(x, o),
         "bayes" => |t, x, o| t.bayes(x, o),
         "bayes_fast" => |t, x, o| t.bayes_with::<FastMath>(x, o),
+        "open" => |t, x, o| t.open(x, o),
         "decode" => {
             let mut ok = 0usize;
             for _ in 0..n {
