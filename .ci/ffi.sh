@@ -6,12 +6,14 @@
 #      and references no allocator;
 #   3. the Rust test of the entry points, and the host C test ffi/tests/host.c: every
 #      function and status, NULL and short buffers, every single-byte corruption,
-#      every aliasing rule, scores equal bit for bit to `mlmap apply`; then host.c again
+#      every aliasing rule, scores of every head equal bit for bit to `mlmap apply`, the
+#      open head within 1e-6 of the float64 reference (tests/golden/layer); then host.c again
 #      under -fsanitize=address,undefined, with the release library and with one built
 #      with nightly's -Zsanitizer=address (a canary read past a buffer must be caught);
 #   4. the C example ffi/firmware/ on an emulated Cortex-M4F (arm-none-eabi-gcc, the
-#      thumbv7em-none-eabihf static library, QEMU mps2-an386): scores equal bit for bit
-#      to the host library's; a canary build with one perturbed value must fail.
+#      thumbv7em-none-eabihf static library, QEMU mps2-an386): scores of every head, and
+#      the open head of a table with T = 1.75 and epsilon = 0.05, equal bit for bit to
+#      the host library's; a canary build with perturbed values must fail.
 # Installs cbindgen (cargo install), gcc-arm-none-eabi, libnewlib-arm-none-eabi and
 # qemu-system-arm (apt-get) when missing, and uses the pinned nightly (.ci/nightly.sh);
 # without a cross compiler or Cortex-M4F Rust target, step 4 fails (MLMAP_ALLOW_SKIP=1
@@ -88,7 +90,7 @@ cargo build --release --features cli --bin mlmap --quiet
 mlmap=target/release/mlmap
 "$mlmap" apply --table tables/default.mlmap --input examples/data/test.csv --output "$work/apply.csv"
 "$work/host" tables/default.mlmap tests/golden/layer/small.mlmap examples/data/test.csv \
-    "$work/apply.csv" | tee "$work/host.log"
+    "$work/apply.csv" tests/golden/layer | tee "$work/host.log"
 grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/host.log" || fail "the host C test did not pass"
 
 section "host C test under AddressSanitizer and UndefinedBehaviorSanitizer"
@@ -111,7 +113,7 @@ for which in release asan; do
     if [[ $which == release ]]; then l=$lib; else l=$asan_lib; fi
     cc "${SAN[@]}" ffi/tests/host.c -Wl,--gc-sections "$l" -lm -o "$work/host-san-$which"
     "$work/host-san-$which" tables/default.mlmap tests/golden/layer/small.mlmap \
-        examples/data/test.csv "$work/apply.csv" 2>"$work/host-san-$which.err" |
+        examples/data/test.csv "$work/apply.csv" tests/golden/layer 2>"$work/host-san-$which.err" |
         tee "$work/host-san-$which.log" || { tail -n 40 "$work/host-san-$which.err" >&2; fail "the sanitized host C test ($which library) failed"; }
     grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/host-san-$which.log" ||
         fail "the sanitized host C test ($which library) did not pass"
@@ -159,8 +161,10 @@ ls -l "$thumb_lib"
 
 fw=ffi/firmware
 "$mlmap" export-c --table tables/default.mlmap --output "$work/table.h"
+"$mlmap" export-c --table tests/golden/layer/small_open.mlmap --output "$work/table_open.h" \
+    --name mlmap_open_table_bytes
 cc "${CFLAGS[@]}" -I"$fw" "$fw/gen_expected.c" -Wl,--gc-sections "$lib" -lm -o "$work/gen_expected"
-"$work/gen_expected" tables/default.mlmap >"$work/expected.h"
+"$work/gen_expected" tables/default.mlmap tests/golden/layer/small_open.mlmap >"$work/expected.h"
 ARM=(-mcpu=cortex-m4 -mthumb -mfloat-abi=hard -mfpu=fpv4-sp-d16 -std=c11 -Os -g -Wall -Wextra
     -Werror -ffunction-sections -fdata-sections -Iinclude -I"$fw" -I"$work")
 link_fw() { # $1 = output ELF, rest = extra flags

@@ -1,6 +1,6 @@
 /**
  * @file mlmap.h
- * @brief The C API of mlmap: ML, MAP and Bayes probability layers for object
+ * @brief The C API of mlmap: ML, MAP, Bayes and open probability layers for object
  * detectors, without allocation, without panics, in bounded time.
  *
  * Link with the static library `libmlmap_ffi.a` (built from `ffi/`). A table is
@@ -190,6 +190,21 @@ enum mlmap_status_t
    * Decision: a score is NaN.
    */
   MLMAP_ERR_NAN_SCORE = 22,
+  /**
+   * The open head was asked for and the table has none (a version-1 or version-2
+   * table, or one without a Bayes head).
+   */
+  MLMAP_ERR_NO_OPEN_HEAD = 23,
+  /**
+   * Decode: the open head's temperature is not in [1e-6, 1e6] (a broken table
+   * invariant, reported on its own).
+   */
+  MLMAP_ERR_OPEN_TEMPERATURE = 24,
+  /**
+   * Decode: the open head's epsilon is neither 0 nor in [2^-126, 1e30] (a broken
+   * table invariant, reported on its own).
+   */
+  MLMAP_ERR_OPEN_EPSILON = 25,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -271,6 +286,17 @@ typedef struct {
    * How the fit placed the edges: 0 = numpy's linspace, 1 = MATLAB's (informational).
    */
   int32_t edge_mode;
+  /**
+   * The open head's temperature `T` (docs/DESIGN.md §1.8), in [1e-6, 1e6]; 0 when
+   * the table has no open head.
+   */
+  float temperature;
+  /**
+   * The open head's prior weight `epsilon` of the unknown category: 0 (no unknown
+   * category) or in [2^-126, 1e30]; 0 also when the table has no open head (tell
+   * the two apart by `temperature`).
+   */
+  float epsilon;
 } mlmap_settings_t;
 
 #ifdef __cplusplus
@@ -460,6 +486,37 @@ mlmap_status_t mlmap_bayes(const mlmap_table_t *table,
                            size_t out_len);
 
 /**
+ * Scores one detection with the open head (docs/DESIGN.md §1.8): `out[i] = OS q
+ * softmax(z / T)_i`, the detector's own softmax at the table's temperature `T`, times
+ * `q`, the probability that the detection is an object of a known class (the Bayes
+ * head's categories against an `unknown` category of prior weight `epsilon`; see
+ * `mlmap_settings` for `T` and `epsilon`). The scores sum to at most the objectness;
+ * they order the classes as the logits do, so `mlmap_decide` on them answers the
+ * largest logit (ties: the lowest index). With `epsilon = 0` and no `background`
+ * category, `q = 1` and the scores are `OS softmax(z / T)`.
+ *
+ * Bit for bit the scores of the Rust layer (`Table::open`) and of `mlmap apply`'s
+ * `open_*` columns for the same table.
+ *
+ * @param table A decoded table with an open head (format version 3 with a Bayes
+ *   head).
+ * @param logits The detection's K logits (`±inf` allowed, NaN not).
+ * @param n_logits Number of logits; must be K.
+ * @param objectness The detection's objectness, in [0, 1].
+ * @param[out] out Receives the K scores; may overlap `logits` in any way (the K
+ *   logits are copied before any score is written), must not overlap the table
+ *   storage.
+ * @param out_len Number of floats at `out`, at least K.
+ * @return As `mlmap_ml`, and `MLMAP_ERR_NO_OPEN_HEAD`.
+ */
+mlmap_status_t mlmap_open(const mlmap_table_t *table,
+                          const float *logits,
+                          size_t n_logits,
+                          float objectness,
+                          float *out,
+                          size_t out_len);
+
+/**
  * Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
  * `objectness[r]` into row `r` of `out`.
  *
@@ -537,6 +594,29 @@ mlmap_status_t mlmap_bayes_batch(const mlmap_table_t *table,
                                  float *out,
                                  size_t out_len,
                                  size_t *done);
+
+/**
+ * Scores a batch with the open head; see `mlmap_ml_batch` (aliasing rules included).
+ *
+ * @param table A decoded table with an open head.
+ * @param logits `rows * n_logits` floats, row-major.
+ * @param rows Number of detections.
+ * @param n_logits Logits per row; must be K.
+ * @param objectness `rows` floats, or NULL for 1 everywhere.
+ * @param[out] out Receives `rows * K` scores.
+ * @param out_len Number of floats at `out`.
+ * @param[out] done If not NULL, receives the number of rows written.
+ * @return As `mlmap_ml_batch`, and `MLMAP_ERR_NO_OPEN_HEAD` (checked with the
+ *   arguments, before any row, even for 0 rows).
+ */
+mlmap_status_t mlmap_open_batch(const mlmap_table_t *table,
+                                const float *logits,
+                                size_t rows,
+                                size_t n_logits,
+                                const float *objectness,
+                                float *out,
+                                size_t out_len,
+                                size_t *done);
 
 /**
  * The tie-safe decision (docs/DESIGN.md §1.7): the index of the largest score;

@@ -139,7 +139,9 @@ pub(crate) struct ValidClass<F, G> {
 impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> ClassSpec<'a, F, G> {
     /// Validates class `i` of a table being built against every per-class invariant,
     /// its name against the whole name rule (DESIGN §6.15); bin counts must be
-    /// `bins_ml` and `bins_map`.
+    /// `bins_ml` and `bins_map`. (`DynTable::new`'s; a fixed-size table passes its own
+    /// storage to [`ClassSpec::validate_with`].)
+    #[cfg(feature = "alloc")]
     pub(crate) fn validate(
         self,
         i: usize,

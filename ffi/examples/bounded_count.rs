@@ -5,11 +5,14 @@
 //! ```text
 //! cargo run --release --features std --example bounded_count -- map 16384
 //! ```
+//!
+//! Each head uses the backend the C API uses: `Libm` for MAP, and for the Bayes and open
+//! heads the device default of `TableView::score_into` (`FastMath`).
 
 use std::hint::black_box;
 use std::process::ExitCode;
 
-use mlmap::{BoundedTable, InferError, Libm};
+use mlmap::{BoundedTable, Head, InferError, Libm};
 
 type Bounded = BoundedTable<16, 64, 64, 64, 17>;
 
@@ -23,7 +26,7 @@ type Layer = fn(&View<'_>, &[f32; 3], f32, &mut [f32; 3]) -> Result<(), InferErr
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
-        eprintln!("usage: bounded_count noop|ml|map|bayes N");
+        eprintln!("usage: bounded_count noop|ml|map|bayes|open N");
         return ExitCode::from(2);
     };
     let table = Box::new(Bounded::from_bytes(TABLE).expect("the shipped table decodes"));
@@ -49,7 +52,8 @@ fn main() -> ExitCode {
         },
         "ml" => |v, x, os, o| v.ml_into(x, os, o, &mut [0.0; 3]),
         "map" => |v, x, os, o| v.map_into::<Libm>(x, os, o, &mut [0.0; 3]),
-        "bayes" => |v, x, os, o| v.bayes_into::<Libm>(x, os, o, &mut [0.0; 4]),
+        "bayes" => |v, x, os, o| v.score_into(Head::Bayes, x, os, o, &mut [0.0; 4]),
+        "open" => |v, x, os, o| v.score_into(Head::Open, x, os, o, &mut [0.0; 4]),
         other => {
             eprintln!("unknown kind {other:?}");
             return ExitCode::from(2);

@@ -8,6 +8,9 @@
 
 #define N_DETECTIONS 32
 
+/* Heads scored for each detection: ML, MAP, Bayes, open. */
+#define N_HEADS 4
+
 static const float detections[N_DETECTIONS][4] = {
     {2.6283f, -3.7759f, -3.7148f, 0.6091f},
     {-1.5155f, -2.1577f, 4.7103f, 0.7606f},

@@ -1,5 +1,5 @@
 //! The C API of mlmap: decode a table into storage the caller owns, score detections with
-//! the ML, MAP and Bayes heads, and take the tie-safe decision. `include/mlmap.h` is
+//! the ML, MAP, Bayes and open heads, and take the tie-safe decision. `include/mlmap.h` is
 //! generated from this file by cbindgen; every doc comment here is a Doxygen comment
 //! there.
 //!
@@ -38,7 +38,7 @@ use core::mem::{align_of, size_of};
 use core::ptr;
 
 use mlmap::{
-    decide, Bounded, BoundedTable, DecodeError, EdgeMode, FastMath, Head, InferError, Libm,
+    decide, Bounded, BoundedTable, DecodeError, EdgeMode, Head, InferError, Libm, TableError,
     TableView, UpperTail,
 };
 
@@ -156,13 +156,22 @@ pub enum mlmap_status_t {
     MLMAP_ERR_TOO_LARGE = 21,
     /// Decision: a score is NaN.
     MLMAP_ERR_NAN_SCORE = 22,
+    /// The open head was asked for and the table has none (a version-1 or version-2
+    /// table, or one without a Bayes head).
+    MLMAP_ERR_NO_OPEN_HEAD = 23,
+    /// Decode: the open head's temperature is not in [1e-6, 1e6] (a broken table
+    /// invariant, reported on its own).
+    MLMAP_ERR_OPEN_TEMPERATURE = 24,
+    /// Decode: the open head's epsilon is neither 0 nor in [2^-126, 1e30] (a broken
+    /// table invariant, reported on its own).
+    MLMAP_ERR_OPEN_EPSILON = 25,
 }
 
 use mlmap_status_t::*;
 
 /// Statuses in code order (tests and `mlmap_status_str`).
 #[doc(hidden)]
-pub const ALL_STATUSES: [mlmap_status_t; 23] = [
+pub const ALL_STATUSES: [mlmap_status_t; 26] = [
     MLMAP_OK,
     MLMAP_ERR_NULL_POINTER,
     MLMAP_ERR_MISALIGNED,
@@ -186,6 +195,9 @@ pub const ALL_STATUSES: [mlmap_status_t; 23] = [
     MLMAP_ERR_NOT_FOUND,
     MLMAP_ERR_TOO_LARGE,
     MLMAP_ERR_NAN_SCORE,
+    MLMAP_ERR_NO_OPEN_HEAD,
+    MLMAP_ERR_OPEN_TEMPERATURE,
+    MLMAP_ERR_OPEN_EPSILON,
 ];
 
 impl From<DecodeError> for mlmap_status_t {
@@ -197,6 +209,8 @@ impl From<DecodeError> for mlmap_status_t {
             DecodeError::UnsupportedVersion { .. } => MLMAP_ERR_UNSUPPORTED_VERSION,
             DecodeError::ShapeMismatch { .. } => MLMAP_ERR_SHAPE_TOO_LARGE,
             DecodeError::BayesShapeMismatch { .. } => MLMAP_ERR_BAYES_SHAPE_TOO_LARGE,
+            DecodeError::Invalid(TableError::Temperature) => MLMAP_ERR_OPEN_TEMPERATURE,
+            DecodeError::Invalid(TableError::Epsilon) => MLMAP_ERR_OPEN_EPSILON,
             DecodeError::Invalid(_) => MLMAP_ERR_INVALID_TABLE,
             _ => MLMAP_ERR_MALFORMED,
         }
@@ -209,6 +223,7 @@ impl From<InferError> for mlmap_status_t {
             InferError::NanLogit { .. } => MLMAP_ERR_NAN_LOGIT,
             InferError::Objectness => MLMAP_ERR_OBJECTNESS,
             InferError::NoBayesHead => MLMAP_ERR_NO_BAYES_HEAD,
+            InferError::NoOpenHead => MLMAP_ERR_NO_OPEN_HEAD,
             _ => MLMAP_ERR_LENGTH,
         }
     }
@@ -258,6 +273,13 @@ pub struct mlmap_settings_t {
     pub upper_tail: i32,
     /// How the fit placed the edges: 0 = numpy's linspace, 1 = MATLAB's (informational).
     pub edge_mode: i32,
+    /// The open head's temperature `T` (docs/DESIGN.md §1.8), in [1e-6, 1e6]; 0 when
+    /// the table has no open head.
+    pub temperature: f32,
+    /// The open head's prior weight `epsilon` of the unknown category: 0 (no unknown
+    /// category) or in [2^-126, 1e30]; 0 also when the table has no open head (tell
+    /// the two apart by `temperature`).
+    pub epsilon: f32,
 }
 
 /// Checks a pointer for NULL and alignment.
@@ -510,6 +532,7 @@ pub unsafe extern "C" fn mlmap_settings(
     status(unsafe {
         view(table).and_then(|v| {
             let s = v.settings();
+            let open = v.open();
             put_outside(
                 settings,
                 mlmap_settings_t {
@@ -524,6 +547,8 @@ pub unsafe extern "C" fn mlmap_settings(
                         EdgeMode::Linspace => 0,
                         EdgeMode::Matlab => 1,
                     },
+                    temperature: open.map_or(0.0, |o| o.temperature()),
+                    epsilon: open.map_or(0.0, |o| o.epsilon()),
                 },
                 table,
             )
@@ -646,32 +671,23 @@ fn score_k<const K: usize>(
     match head {
         Head::Ml => v.ml_into(x, objectness, out, &mut scratch),
         Head::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
-        Head::Bayes => score_bayes(v, x, objectness, out),
-        Head::Open => score_open(v, x, objectness, out),
+        Head::Bayes | Head::Open => score_categories(v, head, x, objectness, out),
     }
 }
 
-/// The Bayes head, with its scratch of one float per category; the `FastMath` backend,
-/// as `Table::bayes`, so C and Rust give the same bits.
+/// The Bayes or the open head, with a scratch of one float per category, through
+/// `TableView::score_into`: the backend `Table::bayes` and `Table::open` use
+/// (`FastMath`), so C, Rust and `mlmap apply` give the same bits.
 #[inline(always)]
-fn score_bayes(
+fn score_categories(
     v: &View<'_>,
+    head: Head,
     x: &[f32],
     objectness: f32,
     out: &mut [f32],
 ) -> Result<(), InferError> {
     let mut cats = [0.0f32; MAX_CATEGORIES];
-    let c = v.bayes().map_or(0, |b| b.categories());
-    v.bayes_into::<FastMath>(x, objectness, out, cats.get_mut(..c).unwrap_or(&mut []))
-}
-
-/// The open head (DESIGN §1.8), with the Bayes head's scratch and backend, as
-/// `Table::open`.
-#[inline(always)]
-fn score_open(v: &View<'_>, x: &[f32], objectness: f32, out: &mut [f32]) -> Result<(), InferError> {
-    let mut cats = [0.0f32; MAX_CATEGORIES];
-    let c = v.bayes().map_or(0, |b| b.categories());
-    v.open_into::<FastMath>(x, objectness, out, cats.get_mut(..c).unwrap_or(&mut []))
+    v.score_into(head, x, objectness, out, &mut cats)
 }
 
 /// Scores one detection: logits `x` (K entries) into `out` (K entries).
@@ -694,8 +710,7 @@ fn score(
                     match head {
                         Head::Ml => v.ml_into(x, objectness, out, s),
                         Head::Map => v.map_into::<Libm>(x, objectness, out, s),
-                        Head::Bayes => score_bayes(v, x, objectness, out),
-                        Head::Open => score_open(v, x, objectness, out),
+                        Head::Bayes | Head::Open => score_categories(v, head, x, objectness, out),
                     }
                 }
             }
@@ -794,8 +809,10 @@ unsafe fn batch(
     if n_logits != k {
         return Err(MLMAP_ERR_LENGTH);
     }
-    if head == Head::Bayes && v.bayes().is_none() {
-        return Err(MLMAP_ERR_NO_BAYES_HEAD);
+    match head {
+        Head::Bayes if v.bayes().is_none() => return Err(MLMAP_ERR_NO_BAYES_HEAD),
+        Head::Open if v.open().is_none() => return Err(MLMAP_ERR_NO_OPEN_HEAD),
+        _ => {}
     }
     let total = rows.checked_mul(k).ok_or(MLMAP_ERR_TOO_LARGE)?;
     if total > isize::MAX as usize / size_of::<f32>() {
@@ -959,6 +976,51 @@ pub unsafe extern "C" fn mlmap_bayes(
     })
 }
 
+/// Scores one detection with the open head (docs/DESIGN.md §1.8): `out[i] = OS q
+/// softmax(z / T)_i`, the detector's own softmax at the table's temperature `T`, times
+/// `q`, the probability that the detection is an object of a known class (the Bayes
+/// head's categories against an `unknown` category of prior weight `epsilon`; see
+/// `mlmap_settings` for `T` and `epsilon`). The scores sum to at most the objectness;
+/// they order the classes as the logits do, so `mlmap_decide` on them answers the
+/// largest logit (ties: the lowest index). With `epsilon = 0` and no `background`
+/// category, `q = 1` and the scores are `OS softmax(z / T)`.
+///
+/// Bit for bit the scores of the Rust layer (`Table::open`) and of `mlmap apply`'s
+/// `open_*` columns for the same table.
+///
+/// @param table A decoded table with an open head (format version 3 with a Bayes
+///   head).
+/// @param logits The detection's K logits (`±inf` allowed, NaN not).
+/// @param n_logits Number of logits; must be K.
+/// @param objectness The detection's objectness, in [0, 1].
+/// @param[out] out Receives the K scores; may overlap `logits` in any way (the K
+///   logits are copied before any score is written), must not overlap the table
+///   storage.
+/// @param out_len Number of floats at `out`, at least K.
+/// @return As `mlmap_ml`, and `MLMAP_ERR_NO_OPEN_HEAD`.
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_open(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    n_logits: usize,
+    objectness: f32,
+    out: *mut f32,
+    out_len: usize,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_ml`.
+    status(unsafe {
+        detection(
+            Head::Open,
+            table,
+            logits,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+        )
+    })
+}
+
 /// Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
 /// `objectness[r]` into row `r` of `out`.
 ///
@@ -1089,6 +1151,46 @@ pub unsafe extern "C" fn mlmap_bayes_batch(
     })
 }
 
+/// Scores a batch with the open head; see `mlmap_ml_batch` (aliasing rules included).
+///
+/// @param table A decoded table with an open head.
+/// @param logits `rows * n_logits` floats, row-major.
+/// @param rows Number of detections.
+/// @param n_logits Logits per row; must be K.
+/// @param objectness `rows` floats, or NULL for 1 everywhere.
+/// @param[out] out Receives `rows * K` scores.
+/// @param out_len Number of floats at `out`.
+/// @param[out] done If not NULL, receives the number of rows written.
+/// @return As `mlmap_ml_batch`, and `MLMAP_ERR_NO_OPEN_HEAD` (checked with the
+///   arguments, before any row, even for 0 rows).
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlmap_open_batch(
+    table: *const mlmap_table_t,
+    logits: *const f32,
+    rows: usize,
+    n_logits: usize,
+    objectness: *const f32,
+    out: *mut f32,
+    out_len: usize,
+    done: *mut usize,
+) -> mlmap_status_t {
+    // SAFETY: as for `mlmap_ml_batch`.
+    status(unsafe {
+        batch(
+            Head::Open,
+            table,
+            logits,
+            rows,
+            n_logits,
+            objectness,
+            out,
+            out_len,
+            done,
+        )
+    })
+}
+
 /// The tie-safe decision (docs/DESIGN.md §1.7): the index of the largest score;
 /// among equal largest scores, the one with the largest logit; among those, the
 /// lowest index. Use it instead of a plain argmax: a detection that every histogram
@@ -1186,6 +1288,9 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         20 => c"no class has this name",
         21 => c"a length is too large to describe memory",
         22 => c"a score is NaN",
+        23 => c"the table has no open head",
+        24 => c"table's open head has a temperature outside [1e-6, 1e6]",
+        25 => c"table's open head has an epsilon that is neither 0 nor in [2^-126, 1e30]",
         _ => c"unknown mlmap status",
     };
     s.as_ptr()

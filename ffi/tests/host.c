@@ -2,14 +2,18 @@
  * Host test of the C API (run by .ci/ffi.sh, also under ASan and UBSan): every function,
  * every status code, NULL and short buffers, misaligned pointers, every single-byte
  * corruption of a table, every aliasing rule of docs/DESIGN.md section 5.1 (outputs in
- * the table storage, overlapping batch buffers), NaN given to mlmap_decide, and scores
- * equal bit for bit to those `mlmap apply` wrote for the same rows.
+ * the table storage, overlapping batch buffers), NaN given to mlmap_decide, scores of
+ * every head equal bit for bit to those `mlmap apply` wrote for the same rows, and the
+ * open head's scores within 1e-6 of the float64 reference of tools/mlmap_ref.py.
  *
- * usage: host TABLE SMALL_TABLE INPUT_CSV APPLY_CSV
- *   TABLE        a table with a Bayes head (tables/default.mlmap)
- *   SMALL_TABLE  a version-1 table without one (tests/golden/layer/small.mlmap)
+ * usage: host TABLE SMALL_TABLE INPUT_CSV APPLY_CSV GOLDEN_DIR
+ *   TABLE        a version-3 table with the Bayes and open heads (tables/default.mlmap)
+ *   SMALL_TABLE  a version-1 table without them (tests/golden/layer/small.mlmap)
  *   INPUT_CSV    detections (id,label,objectness,<class logits>...)
  *   APPLY_CSV    `mlmap apply --table TABLE --input INPUT_CSV` of them
+ *   GOLDEN_DIR   tests/golden/layer: small_bayes.mlmap (version 2: a Bayes head, no
+ *                open head), small_open.mlmap and small_open_nobg.mlmap (version 3),
+ *                and open.csv, the reference's open-head scores for these and TABLE
  *
  * Prints one line per failed check and ends with "N passed, M failed"; exits 1 on
  * any failure.
@@ -112,15 +116,18 @@ static void test_limits_and_status_strings(void) {
     /* Every status has its own non-empty description; anything else is unknown. */
     const char *unknown = mlmap_status_str(-1);
     CHECK(unknown != NULL && strcmp(unknown, "unknown mlmap status") == 0);
-    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_NAN_SCORE + 1), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_OPEN_EPSILON + 1), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MAX), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MIN), unknown) == 0);
-    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_NAN_SCORE; s++) {
+    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_OPEN_EPSILON; s++) {
         const char *d = mlmap_status_str(s);
         CHECK(d != NULL && d[0] != '\0' && strcmp(d, unknown) != 0);
         for (int32_t t = MLMAP_OK; t < s; t++) CHECK(strcmp(d, mlmap_status_str(t)) != 0);
     }
     CHECK(strcmp(mlmap_status_str(MLMAP_OK), "success") == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_NO_OPEN_HEAD), "the table has no open head") == 0);
+    CHECK(strstr(mlmap_status_str(MLMAP_ERR_OPEN_TEMPERATURE), "temperature") != NULL);
+    CHECK(strstr(mlmap_status_str(MLMAP_ERR_OPEN_EPSILON), "epsilon") != NULL);
 }
 
 /* Every function given storage that holds no table. */
@@ -139,9 +146,12 @@ static void test_no_table(const mlmap_table_t *t) {
     EXPECT(mlmap_ml(t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
     EXPECT(mlmap_map(t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
     EXPECT(mlmap_bayes(t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_open(t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
     EXPECT(mlmap_ml_batch(t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_TABLE);
     EXPECT(mlmap_map_batch(t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_TABLE);
     EXPECT(mlmap_bayes_batch(t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_TABLE);
+    EXPECT(mlmap_open_batch(t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_TABLE);
+    CHECK(done == 99);
 }
 
 static void test_decode_arguments(const uint8_t *bytes, size_t len) {
@@ -193,10 +203,10 @@ static void test_decode_errors(const uint8_t *bytes, size_t len) {
 
     /* Header: magic, version, K, ML bins, MAP bins, Bayes bins, categories (one byte
      * each for this table). */
-    CHECK(bytes[4] == 2 && bytes[5] == 3 && bytes[6] == 22 && bytes[7] == 17 &&
+    CHECK(bytes[4] == 3 && bytes[5] == 3 && bytes[6] == 22 && bytes[7] == 17 &&
           bytes[8] == 22 && bytes[9] == 4);
     memcpy(b, bytes, len);
-    b[4] = 3;
+    b[4] = 4;
     fix_crc(b, len);
     EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_UNSUPPORTED_VERSION);
 
@@ -233,6 +243,55 @@ static void test_decode_errors(const uint8_t *bytes, size_t len) {
     memcpy(b + 12, &minus_one, 4);
     fix_crc(b, len);
     EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_INVALID_TABLE);
+
+    /* The open head's temperature and epsilon (f32 LE, the 8 bytes before the CRC),
+     * each out of its range: their own statuses. */
+    const float bad_t[] = {0.0f, -1.0f, 9.9e-7f, 1.01e6f, INFINITY, NAN};
+    const float bad_eps[] = {-1.0f, -0.0f, 1e-40f, 1.01e30f, INFINITY, NAN};
+    float one = 1.0f, zero = 0.0f;
+    CHECK(memcmp(bytes + len - 12, &one, 4) == 0 && memcmp(bytes + len - 8, &zero, 4) == 0);
+    for (size_t i = 0; i < sizeof bad_t / sizeof bad_t[0]; i++) {
+        memcpy(b, bytes, len);
+        memcpy(b + len - 12, &bad_t[i], 4);
+        fix_crc(b, len);
+        EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_OPEN_TEMPERATURE);
+        test_no_table(t);
+        memcpy(b, bytes, len);
+        memcpy(b + len - 8, &bad_eps[i], 4);
+        fix_crc(b, len);
+        EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_OPEN_EPSILON);
+    }
+    /* The range ends are valid, and mlmap_settings gives back the stored bits. */
+    const float good[][2] = {{1e-6f, 0.0f}, {1e6f, 1e30f}, {1.75f, 0x1p-126f}, {0.5f, 0.05f}};
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        memcpy(b, bytes, len);
+        memcpy(b + len - 12, &good[i][0], 4);
+        memcpy(b + len - 8, &good[i][1], 4);
+        fix_crc(b, len);
+        EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_OK);
+        mlmap_settings_t st;
+        EXPECT(mlmap_settings(t, &st), MLMAP_OK);
+        CHECK(same_bits(st.temperature, good[i][0]) && same_bits(st.epsilon, good[i][1]));
+        float x[3] = {1.0f, -2.0f, 0.5f}, out[3];
+        EXPECT(mlmap_open(t, x, 3, 1.0f, out, 3), MLMAP_OK);
+    }
+    /* Raising epsilon never raises a score (DESIGN section 1.8); a larger temperature
+     * flattens the softmax. */
+    {
+        const float eps[] = {0.0f, 1e-3f, 0.05f, 1.0f, 1e3f, 1e30f};
+        const float x[3] = {2.5f, -1.0f, 0.3f};
+        float prev[3] = {INFINITY, INFINITY, INFINITY}, out[3];
+        for (size_t i = 0; i < sizeof eps / sizeof eps[0]; i++) {
+            memcpy(b, bytes, len);
+            memcpy(b + len - 8, &eps[i], 4);
+            fix_crc(b, len);
+            EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_OK);
+            EXPECT(mlmap_open(t, x, 3, 0.9f, out, 3), MLMAP_OK);
+            for (int c = 0; c < 3; c++) CHECK(out[c] >= 0.0f && out[c] <= prev[c]);
+            memcpy(prev, out, sizeof out);
+        }
+        CHECK(prev[0] < 1e-20f);
+    }
 
     /* A failed decode leaves the storage without a table, even one that held one. */
     EXPECT(mlmap_table_decode(t, sizeof *t, bytes, len), MLMAP_OK);
@@ -280,9 +339,10 @@ static void test_every_corruption(const uint8_t *bytes, size_t len) {
             if (s >= 0 && s < 32) seen[s]++;
             else unknown++;
             if (s == MLMAP_OK) {
-                /* Then it is a valid table that scores. */
+                /* Then it is a valid table that scores, with every head. */
                 float x[3] = {1.0f, -2.0f, 0.5f}, out[3];
-                ok += mlmap_map(t, x, 3, 1.0f, out, 3) == MLMAP_OK;
+                ok += mlmap_map(t, x, 3, 1.0f, out, 3) == MLMAP_OK &&
+                      mlmap_open(t, x, 3, 1.0f, out, 3) == MLMAP_OK;
             }
         }
     }
@@ -290,6 +350,7 @@ static void test_every_corruption(const uint8_t *bytes, size_t len) {
     CHECK(ok == seen[MLMAP_OK]);
     CHECK(seen[MLMAP_ERR_MALFORMED] > 0 && seen[MLMAP_ERR_INVALID_TABLE] > 0);
     CHECK(seen[MLMAP_ERR_NOT_A_TABLE] > 0 && seen[MLMAP_ERR_UNSUPPORTED_VERSION] > 0);
+    CHECK(seen[MLMAP_ERR_OPEN_TEMPERATURE] > 0 && seen[MLMAP_ERR_OPEN_EPSILON] > 0);
     CHECK(seen[MLMAP_ERR_CORRUPTED] == 0);
     free(b);
 }
@@ -314,6 +375,8 @@ static void test_table_info(const mlmap_table_t *t) {
     CHECK(s.lambda_bayes > 0.0f && s.lambda_bayes <= 1.0f);
     CHECK(s.upper_tail == 0 || s.upper_tail == 1);
     CHECK(s.edge_mode == 0 || s.edge_mode == 1);
+    /* The shipped table's open head: T = 1, epsilon = 0 (docs/FORMAT.md). */
+    CHECK(s.temperature == 1.0f && same_bits(s.epsilon, 0.0f));
     EXPECT(mlmap_settings(t, NULL), MLMAP_ERR_NULL_POINTER);
 
     const char *names[3] = {"car", "cyclist", "pedestrian"};
@@ -554,6 +617,9 @@ static void test_outputs_in_table(const mlmap_table_t *t) {
         EXPECT(mlmap_bayes_batch(&victim, x, 1, 3, NULL, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
         EXPECT(mlmap_map(&victim, x, 3, 1.0f, (float *)in, 3), MLMAP_ERR_OVERLAP);
         EXPECT(mlmap_bayes_batch(&victim, x, 1, 3, NULL, (float *)in, 3, NULL), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_open(&victim, x, 3, 1.0f, (float *)in, 3), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_open_batch(&victim, x, 1, 3, os, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_open_batch(&victim, x, 1, 3, NULL, (float *)in, 3, NULL), MLMAP_ERR_OVERLAP);
         if (offsets[i] + sizeof(mlmap_shape_t) <= l.table_size) {
             EXPECT(mlmap_shape(&victim, (mlmap_shape_t *)in), MLMAP_ERR_OVERLAP);
             EXPECT(mlmap_settings(&victim, (mlmap_settings_t *)in), MLMAP_ERR_OVERLAP);
@@ -579,6 +645,9 @@ static void test_outputs_in_table(const mlmap_table_t *t) {
     float a[3], b[3];
     EXPECT(mlmap_bayes(&victim, x, 3, 1.0f, a, 3), MLMAP_OK);
     EXPECT(mlmap_bayes(t, x, 3, 1.0f, b, 3), MLMAP_OK);
+    CHECK(memcmp(a, b, sizeof a) == 0);
+    EXPECT(mlmap_open(&victim, x, 3, 1.0f, a, 3), MLMAP_OK);
+    EXPECT(mlmap_open(t, x, 3, 1.0f, b, 3), MLMAP_OK);
     CHECK(memcmp(a, b, sizeof a) == 0);
 }
 
@@ -703,8 +772,9 @@ static int column(char **fields, int n, const char *name) {
     exit(2);
 }
 
-/* Scores of every row equal, bit for bit, what `mlmap apply` wrote; the batch calls
- * give the same bits; the Bayes scores are in [0, OS] and sum to at most OS. */
+/* Scores of every row and every head equal, bit for bit, what `mlmap apply` wrote;
+ * the batch calls give the same bits; the Bayes and open scores are in [0, OS] and sum
+ * to at most OS; the open head's decision is `open_pred` and the largest logit. */
 static void test_against_apply(const mlmap_table_t *t, const char *input, const char *applied) {
     size_t in_len, ap_len;
     char *in = (char *)read_file(input, &in_len), *ap = (char *)read_file(applied, &ap_len);
@@ -713,7 +783,8 @@ static void test_against_apply(const mlmap_table_t *t, const char *input, const 
     char *f[64], *g[64];
     int nf = split(in_line, f, 64), ng = split(ap_line, g, 64);
     const char *names[3] = {"car", "cyclist", "pedestrian"};
-    int ci[3], cml[3], cmap[3], cos = column(f, nf, "objectness");
+    int ci[3], cml[3], cmap[3], cbayes[3], copen[3], cos = column(f, nf, "objectness");
+    int cpred = column(g, ng, "open_pred");
     char name[64];
     for (int i = 0; i < 3; i++) {
         ci[i] = column(f, nf, names[i]);
@@ -721,11 +792,17 @@ static void test_against_apply(const mlmap_table_t *t, const char *input, const 
         cml[i] = column(g, ng, name);
         snprintf(name, sizeof name, "map_%s", names[i]);
         cmap[i] = column(g, ng, name);
+        snprintf(name, sizeof name, "bayes_%s", names[i]);
+        cbayes[i] = column(g, ng, name);
+        snprintf(name, sizeof name, "open_%s", names[i]);
+        copen[i] = column(g, ng, name);
     }
     enum { MAXR = 20000 };
     static float xs[MAXR][3], oss[MAXR], ml_want[MAXR][3], map_want[MAXR][3];
+    static float bayes_want[MAXR][3], open_want[MAXR][3];
     size_t rows = 0;
-    unsigned ml_diff = 0, map_diff = 0, bayes_bad = 0;
+    unsigned ml_diff = 0, map_diff = 0, bayes_diff = 0, open_diff = 0, bayes_bad = 0;
+    unsigned open_bad = 0, open_pred_diff = 0;
     while ((in_line = strtok_r(NULL, "\n", &in_save)) && (ap_line = strtok_r(NULL, "\n", &ap_save))) {
         if (rows == MAXR) break;
         nf = split(in_line, f, 64);
@@ -733,29 +810,50 @@ static void test_against_apply(const mlmap_table_t *t, const char *input, const 
         /* The CLI reads numbers as double and narrows them to float; so does this. */
         for (int i = 0; i < 3; i++) xs[rows][i] = (float)strtod(f[ci[i]], NULL);
         oss[rows] = (float)strtod(f[cos], NULL);
-        float ml[3], map[3], bayes[3];
+        float ml[3], map[3], bayes[3], open[3];
         EXPECT(mlmap_ml(t, xs[rows], 3, oss[rows], ml, 3), MLMAP_OK);
         EXPECT(mlmap_map(t, xs[rows], 3, oss[rows], map, 3), MLMAP_OK);
         EXPECT(mlmap_bayes(t, xs[rows], 3, oss[rows], bayes, 3), MLMAP_OK);
-        float sum = 0.0f;
+        EXPECT(mlmap_open(t, xs[rows], 3, oss[rows], open, 3), MLMAP_OK);
+        float sum = 0.0f, open_sum = 0.0f;
         for (int i = 0; i < 3; i++) {
             /* Rust prints the shortest decimal that reads back as the same float. */
             ml_want[rows][i] = strtof(g[cml[i]], NULL);
             map_want[rows][i] = strtof(g[cmap[i]], NULL);
+            bayes_want[rows][i] = strtof(g[cbayes[i]], NULL);
+            open_want[rows][i] = strtof(g[copen[i]], NULL);
             ml_diff += !same_bits(ml[i], ml_want[rows][i]);
             map_diff += !same_bits(map[i], map_want[rows][i]);
+            bayes_diff += !same_bits(bayes[i], bayes_want[rows][i]);
+            open_diff += !same_bits(open[i], open_want[rows][i]);
             bayes_bad += !(bayes[i] >= 0.0f && bayes[i] <= oss[rows]);
+            open_bad += !(open[i] >= 0.0f && open[i] <= oss[rows]);
             sum += bayes[i];
+            open_sum += open[i];
         }
         bayes_bad += !(sum <= oss[rows] * (1.0f + 1e-5f));
+        open_bad += !(open_sum <= oss[rows] * (1.0f + 1e-5f));
+        /* The open head decides as the detector: the largest logit (no ties in this
+         * file's logits), and `mlmap apply` wrote that class. */
+        size_t decided = 99, largest = 0;
+        for (size_t i = 1; i < 3; i++)
+            if (xs[rows][i] > xs[rows][largest]) largest = i;
+        EXPECT(mlmap_decide(open, xs[rows], 3, &decided), MLMAP_OK);
+        open_pred_diff += decided != largest || strcmp(g[cpred], names[decided]) != 0;
         rows++;
     }
     fprintf(stderr, "-- %zu rows compared with mlmap apply\n", rows);
     CHECK(rows >= 1000);
     CHECK(ml_diff == 0);
     CHECK(map_diff == 0);
+    CHECK(bayes_diff == 0);
+    CHECK(open_diff == 0);
     CHECK(bayes_bad == 0);
-    if (ml_diff || map_diff) fprintf(stderr, "  %u ML and %u MAP scores differ\n", ml_diff, map_diff);
+    CHECK(open_bad == 0);
+    CHECK(open_pred_diff == 0);
+    if (ml_diff || map_diff || bayes_diff || open_diff)
+        fprintf(stderr, "  %u ML, %u MAP, %u Bayes and %u open scores differ\n", ml_diff, map_diff,
+                bayes_diff, open_diff);
 
     /* The batch entry points, all rows at once, give the same bits. */
     static float out[MAXR][3];
@@ -766,13 +864,16 @@ static void test_against_apply(const mlmap_table_t *t, const char *input, const 
     EXPECT(mlmap_map_batch(t, &xs[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
     CHECK(memcmp(out, map_want, rows * 3 * sizeof(float)) == 0);
     EXPECT(mlmap_bayes_batch(t, &xs[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
-    unsigned bayes_diff = 0;
-    for (size_t r = 0; r < rows; r++) {
-        float b[3];
-        mlmap_bayes(t, xs[r], 3, oss[r], b, 3);
-        for (int i = 0; i < 3; i++) bayes_diff += !same_bits(b[i], out[r][i]);
-    }
-    CHECK(bayes_diff == 0);
+    CHECK(done == rows);
+    CHECK(memcmp(out, bayes_want, rows * 3 * sizeof(float)) == 0);
+    done = 0;
+    EXPECT(mlmap_open_batch(t, &xs[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
+    CHECK(done == rows);
+    CHECK(memcmp(out, open_want, rows * 3 * sizeof(float)) == 0);
+    /* In place, all rows at once. */
+    memcpy(out, xs, rows * 3 * sizeof(float));
+    EXPECT(mlmap_open_batch(t, &out[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
+    CHECK(memcmp(out, open_want, rows * 3 * sizeof(float)) == 0);
 
     /* A copy of the storage is the same table. */
     static mlmap_table_t copy;
@@ -785,11 +886,86 @@ static void test_against_apply(const mlmap_table_t *t, const char *input, const 
     free(ap);
 }
 
+/* The open head against the float64 reference of tools/mlmap_ref.py (open.csv: table,
+ * case, objectness, x0, x1, x2, open0, open1, open2, q, error): every score within
+ * 1e-6 (the layer's golden tolerance, tests/support.rs), the error rows' statuses, the
+ * decision the largest logit, and a one-row batch the same bits as the single call. */
+static void test_open_golden(const char *path, const char *const table_names[],
+                             const mlmap_table_t *const tables[], int n_tables) {
+    size_t len;
+    char *text = (char *)read_file(path, &len), *save = NULL, *f[16];
+    unsigned rows[8] = {0}, bad_status = 0, far = 0, wrong_decision = 0, batch_diff = 0;
+    double worst = 0.0;
+    for (char *line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        if (line[0] == '#' || strncmp(line, "table,", 6) == 0) continue;
+        int n = split(line, f, 16);
+        int which = -1;
+        for (int i = 0; i < n_tables; i++)
+            if (strcmp(f[0], table_names[i]) == 0) which = i;
+        if (n != 11 || which < 0) {
+            fprintf(stderr, "%s: unexpected line (%d fields, table %s)\n", path, n, f[0]);
+            failed++;
+            continue;
+        }
+        rows[which]++;
+        const mlmap_table_t *t = tables[which];
+        float os = strtof(f[2], NULL), x[3], out[3] = {-7.0f, -7.0f, -7.0f}, b[3];
+        for (int i = 0; i < 3; i++) x[i] = strtof(f[3 + i], NULL);
+        mlmap_status_t want = MLMAP_OK;
+        if (strncmp(f[10], "nan_logit:", 10) == 0) want = MLMAP_ERR_NAN_LOGIT;
+        else if (strcmp(f[10], "objectness") == 0) want = MLMAP_ERR_OBJECTNESS;
+        else if (f[10][0] != '\0') want = (mlmap_status_t)-1;
+        mlmap_status_t got = mlmap_open(t, x, 3, os, out, 3);
+        size_t done = 99;
+        mlmap_status_t got_batch = mlmap_open_batch(t, x, 1, 3, &os, b, 3, &done);
+        if (got != want || got_batch != want) {
+            bad_status++;
+            fprintf(stderr, "  %s, %s: status %d and %d (batch), want %d\n", f[0], f[1],
+                    (int)got, (int)got_batch, (int)want);
+            continue;
+        }
+        if (want != MLMAP_OK) {
+            bad_status += !(out[0] == -7.0f && out[1] == -7.0f && out[2] == -7.0f && done == 0);
+            continue;
+        }
+        for (int i = 0; i < 3; i++) {
+            double err = fabs((double)out[i] - strtod(f[6 + i], NULL));
+            if (!(err <= 1e-6)) {
+                far++;
+                fprintf(stderr, "  %s, %s: open score %d %.9g vs %s\n", f[0], f[1], i,
+                        (double)out[i], f[6 + i]);
+            }
+            if (err > worst) worst = err;
+            batch_diff += !same_bits(out[i], b[i]);
+        }
+        size_t decided = 99, largest = 0;
+        for (size_t i = 1; i < 3; i++)
+            if (x[i] > x[largest]) largest = i;
+        EXPECT(mlmap_decide(out, x, 3, &decided), MLMAP_OK);
+        wrong_decision += decided != largest;
+    }
+    fprintf(stderr, "-- open head against the reference: worst score error %.3g\n", worst);
+    for (int i = 0; i < n_tables; i++) CHECK(rows[i] >= 40);
+    CHECK(bad_status == 0);
+    CHECK(far == 0);
+    CHECK(wrong_decision == 0);
+    CHECK(batch_diff == 0);
+    free(text);
+}
+
 int main(int argc, char **argv) {
-    if (argc != 5) {
-        fprintf(stderr, "usage: %s TABLE SMALL_TABLE INPUT_CSV APPLY_CSV\n", argv[0]);
+    if (argc != 6) {
+        fprintf(stderr, "usage: %s TABLE SMALL_TABLE INPUT_CSV APPLY_CSV GOLDEN_DIR\n", argv[0]);
         return 2;
     }
+    char path[4096];
+    size_t bayes_len, open_len, nobg_len;
+    snprintf(path, sizeof path, "%s/small_bayes.mlmap", argv[5]);
+    uint8_t *bayes_v2 = read_file(path, &bayes_len);
+    snprintf(path, sizeof path, "%s/small_open.mlmap", argv[5]);
+    uint8_t *open_bytes = read_file(path, &open_len);
+    snprintf(path, sizeof path, "%s/small_open_nobg.mlmap", argv[5]);
+    uint8_t *nobg_bytes = read_file(path, &nobg_len);
     size_t len, small_len;
     uint8_t *bytes = read_file(argv[1], &len);
     uint8_t *small = read_file(argv[2], &small_len);
@@ -805,6 +981,7 @@ int main(int argc, char **argv) {
     test_head_arguments(&table, mlmap_ml, mlmap_ml_batch, "ML");
     test_head_arguments(&table, mlmap_map, mlmap_map_batch, "MAP");
     test_head_arguments(&table, mlmap_bayes, mlmap_bayes_batch, "Bayes");
+    test_head_arguments(&table, mlmap_open, mlmap_open_batch, "open");
     test_decide();
     test_decide_nan();
     test_decode_table_size(bytes, len);
@@ -812,9 +989,11 @@ int main(int argc, char **argv) {
     test_batch_overlap(&table, mlmap_ml_batch, "ML");
     test_batch_overlap(&table, mlmap_map_batch, "MAP");
     test_batch_overlap(&table, mlmap_bayes_batch, "Bayes");
+    test_batch_overlap(&table, mlmap_open_batch, "open");
     test_one_overlap(&table, mlmap_ml, "ML");
     test_one_overlap(&table, mlmap_map, "MAP");
     test_one_overlap(&table, mlmap_bayes, "Bayes");
+    test_one_overlap(&table, mlmap_open, "open");
     test_against_apply(&table, argv[3], argv[4]);
 
     /* A version-1 table has no Bayes head. */
@@ -834,9 +1013,65 @@ int main(int argc, char **argv) {
     EXPECT(mlmap_bayes_batch(&small_t, x, 0, 3, NULL, out, 0, &done), MLMAP_ERR_NO_BAYES_HEAD);
     CHECK(done == 99);
     EXPECT(mlmap_ml(&small_t, x, 3, 1.0f, out, 3), MLMAP_OK);
+    /* Nor the open head. */
+    CHECK(settings.temperature == 0.0f && settings.epsilon == 0.0f);
+    EXPECT(mlmap_open(&small_t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_OPEN_HEAD);
+    EXPECT(mlmap_open_batch(&small_t, x, 1, 3, NULL, out, 3, NULL), MLMAP_ERR_NO_OPEN_HEAD);
+    EXPECT(mlmap_open_batch(&small_t, x, 0, 3, NULL, out, 0, &done), MLMAP_ERR_NO_OPEN_HEAD);
+    CHECK(done == 99);
+
+    /* A version-2 table has a Bayes head and no open head: the open calls say so, with
+     * nothing written, whatever else is wrong with the detection. */
+    static mlmap_table_t bayes_t, open_t, nobg_t;
+    EXPECT(mlmap_table_decode(&bayes_t, sizeof bayes_t, bayes_v2, bayes_len), MLMAP_OK);
+    CHECK(bayes_v2[4] == 2);
+    EXPECT(mlmap_shape(&bayes_t, &shape), MLMAP_OK);
+    CHECK(shape.classes == 3 && shape.bins_bayes > 0 && shape.categories == 4);
+    EXPECT(mlmap_settings(&bayes_t, &settings), MLMAP_OK);
+    CHECK(settings.lambda_bayes > 0.0f);
+    CHECK(settings.temperature == 0.0f && settings.epsilon == 0.0f);
+    EXPECT(mlmap_bayes(&bayes_t, x, 3, 1.0f, out, 3), MLMAP_OK);
+    for (int i = 0; i < 3; i++) out[i] = -7.0f;
+    float xnan[3] = {NAN, 0.0f, 0.0f};
+    EXPECT(mlmap_open(&bayes_t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_OPEN_HEAD);
+    EXPECT(mlmap_open(&bayes_t, xnan, 3, 2.0f, out, 3), MLMAP_ERR_NO_OPEN_HEAD);
+    EXPECT(mlmap_open(&bayes_t, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_OPEN_HEAD);
+    done = 99;
+    EXPECT(mlmap_open_batch(&bayes_t, x, 1, 3, NULL, out, 3, &done), MLMAP_ERR_NO_OPEN_HEAD);
+    EXPECT(mlmap_open_batch(&bayes_t, x, 0, 3, NULL, out, 0, &done), MLMAP_ERR_NO_OPEN_HEAD);
+    CHECK(done == 99 && out[0] == -7.0f && out[1] == -7.0f && out[2] == -7.0f);
+    /* The argument checks come first, as for the Bayes head. */
+    EXPECT(mlmap_open(&bayes_t, x, 2, 1.0f, out, 3), MLMAP_ERR_LENGTH);
+    EXPECT(mlmap_open(&bayes_t, NULL, 3, 1.0f, out, 3), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_open_batch(&bayes_t, x, 1, 3, NULL, (float *)((char *)&bayes_t + 64), 3, NULL),
+           MLMAP_ERR_NO_OPEN_HEAD);
+
+    /* Version-3 tables with T = 1.75, epsilon = 0.05 and a background category, and
+     * with T = 0.8, epsilon = 0 and none. */
+    EXPECT(mlmap_table_decode(&open_t, sizeof open_t, open_bytes, open_len), MLMAP_OK);
+    EXPECT(mlmap_table_decode(&nobg_t, sizeof nobg_t, nobg_bytes, nobg_len), MLMAP_OK);
+    EXPECT(mlmap_settings(&open_t, &settings), MLMAP_OK);
+    CHECK(same_bits(settings.temperature, 1.75f) && same_bits(settings.epsilon, 0.05f));
+    EXPECT(mlmap_shape(&open_t, &shape), MLMAP_OK);
+    CHECK(shape.classes == 3 && shape.bins_bayes == 4 && shape.categories == 4);
+    EXPECT(mlmap_settings(&nobg_t, &settings), MLMAP_OK);
+    CHECK(same_bits(settings.temperature, 0.8f) && same_bits(settings.epsilon, 0.0f));
+    EXPECT(mlmap_shape(&nobg_t, &shape), MLMAP_OK);
+    CHECK(shape.categories == 3);
+    test_head_arguments(&open_t, mlmap_open, mlmap_open_batch, "open (T = 1.75, epsilon = 0.05)");
+    test_batch_overlap(&open_t, mlmap_open_batch, "open (T = 1.75, epsilon = 0.05)");
+    test_one_overlap(&open_t, mlmap_open, "open (T = 1.75, epsilon = 0.05)");
+    test_outputs_in_table(&open_t);
+    snprintf(path, sizeof path, "%s/open.csv", argv[5]);
+    const char *const golden_names[3] = {"default", "small_open", "small_open_nobg"};
+    const mlmap_table_t *const golden_tables[3] = {&table, &open_t, &nobg_t};
+    test_open_golden(path, golden_names, golden_tables, 3);
 
     free(bytes);
     free(small);
+    free(bayes_v2);
+    free(open_bytes);
+    free(nobg_bytes);
     printf("%u passed, %u failed\n", passed, failed);
     return failed ? 1 : 0;
 }

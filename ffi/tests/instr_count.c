@@ -2,7 +2,7 @@
  * against the Rust call (examples/instr_count.rs, same table, same rows, same loop):
  * run N and 2N and divide the difference by N (tools/callgrind_ffi.sh).
  *
- * usage: instr_count TABLE TEST_CSV noop|ml|map|bayes N */
+ * usage: instr_count TABLE TEST_CSV noop|ml|map|bayes|open N */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,10 +40,10 @@ int main(int argc, char **argv) {
         os[r] = strtof(p, &p);
         for (int i = 0; i < 3; i++) xs[r][i] = strtof(p + 1, &p);
     }
-    head_fn fns[4] = {noop, mlmap_ml, mlmap_map, mlmap_bayes};
-    const char *names[4] = {"noop", "ml", "map", "bayes"};
+    head_fn fns[5] = {noop, mlmap_ml, mlmap_map, mlmap_bayes, mlmap_open};
+    const char *names[5] = {"noop", "ml", "map", "bayes", "open"};
     int kind = -1;
-    for (int i = 0; i < 4; i++)
+    for (int i = 0; i < 5; i++)
         if (strcmp(argv[3], names[i]) == 0) kind = i;
     if (kind < 0) return 2;
     volatile head_fn fn = fns[kind];

@@ -49,8 +49,12 @@ fn c_api_scores_equal_the_rust_layer_bit_for_bit() {
             rust.ml(x, *os).unwrap().0,
             rust.map(x, *os).unwrap().0,
             rust.bayes(x, *os).unwrap().0,
+            rust.open(x, *os).unwrap().0,
         ];
-        for (h, f) in [mlmap_ml as One, mlmap_map, mlmap_bayes].iter().enumerate() {
+        for (h, f) in [mlmap_ml as One, mlmap_map, mlmap_bayes, mlmap_open]
+            .iter()
+            .enumerate()
+        {
             let mut out = [0.0f32; 3];
             // SAFETY: 3 logits, 3 outputs, a decoded table.
             let s = unsafe { f(t, x.as_ptr(), 3, *os, out.as_mut_ptr(), 3) };
@@ -81,6 +85,96 @@ fn c_api_scores_equal_the_rust_layer_bit_for_bit() {
     let mut want = vec![[0.0f32; 3]; rows.len()];
     rust.bayes_batch(&rows, Some(&os), &mut want).unwrap();
     assert_eq!(bits(&out), bits(want.as_flattened()));
+    // SAFETY: as above.
+    let s = unsafe {
+        mlmap_open_batch(
+            t,
+            xs.as_ptr(),
+            dets.len(),
+            3,
+            os.as_ptr(),
+            out.as_mut_ptr(),
+            out.len(),
+            &mut done,
+        )
+    };
+    assert_eq!((s, done), (mlmap_status_t::MLMAP_OK, dets.len()));
+    rust.open_batch(&rows, Some(&os), &mut want).unwrap();
+    assert_eq!(bits(&out), bits(want.as_flattened()));
+}
+
+/// Decodes `bytes` into fresh storage.
+fn decoded(bytes: &[u8]) -> (Box<Storage>, mlmap_status_t) {
+    let mut storage = Box::new(Storage([0; 128 * 1024]));
+    let t = storage.0.as_mut_ptr().cast::<mlmap_table_t>();
+    // SAFETY: 128 KiB of 8-aligned storage, and the table's bytes.
+    let s = unsafe { mlmap_table_decode(t, storage.0.len(), bytes.as_ptr(), bytes.len()) };
+    (storage, s)
+}
+
+#[test]
+fn the_open_head_of_a_small_table_equals_the_rust_layer() {
+    // T = 1.75, epsilon = 0.05, a background category.
+    const OPEN: &[u8] = include_bytes!("../../tests/golden/layer/small_open.mlmap");
+    let rust = Table::<3, 4, 2, 4, 4>::from_bytes(OPEN).unwrap();
+    let p = rust.open_params().unwrap();
+    let (storage, s) = decoded(OPEN);
+    assert_eq!(s, mlmap_status_t::MLMAP_OK);
+    let t = storage.0.as_ptr().cast::<mlmap_table_t>();
+    let mut settings = mlmap_settings_t::default();
+    // SAFETY: a decoded table and a settings struct.
+    assert_eq!(
+        unsafe { mlmap_settings(t, &mut settings) },
+        mlmap_status_t::MLMAP_OK
+    );
+    assert_eq!(settings.temperature.to_bits(), p.temperature().to_bits());
+    assert_eq!(settings.epsilon.to_bits(), p.epsilon().to_bits());
+    for (x, os) in detections() {
+        let want = rust.open(&x, os).unwrap().0;
+        let mut out = [0.0f32; 3];
+        // SAFETY: 3 logits, 3 outputs, a decoded table.
+        let s = unsafe { mlmap_open(t, x.as_ptr(), 3, os, out.as_mut_ptr(), 3) };
+        assert_eq!(s, mlmap_status_t::MLMAP_OK);
+        assert_eq!(out.map(f32::to_bits), want.map(f32::to_bits), "{x:?}, {os}");
+    }
+}
+
+#[test]
+fn tables_without_the_open_head_answer_no_open_head() {
+    for bytes in [
+        &include_bytes!("../../tests/golden/layer/small_bayes.mlmap")[..],
+        &include_bytes!("../../tests/golden/layer/small.mlmap")[..],
+    ] {
+        let (storage, s) = decoded(bytes);
+        assert_eq!(s, mlmap_status_t::MLMAP_OK);
+        let t = storage.0.as_ptr().cast::<mlmap_table_t>();
+        let (x, mut out, mut done) = ([0.5f32, 1.0, -1.0], [-7.0f32; 3], 99usize);
+        // SAFETY: 3 logits, 3 outputs, a decoded table.
+        let s = unsafe { mlmap_open(t, x.as_ptr(), 3, 1.0, out.as_mut_ptr(), 3) };
+        assert_eq!(s, mlmap_status_t::MLMAP_ERR_NO_OPEN_HEAD);
+        // SAFETY: as above; 0 rows.
+        let s = unsafe {
+            mlmap_open_batch(
+                t,
+                x.as_ptr(),
+                0,
+                3,
+                std::ptr::null(),
+                out.as_mut_ptr(),
+                0,
+                &mut done,
+            )
+        };
+        assert_eq!(s, mlmap_status_t::MLMAP_ERR_NO_OPEN_HEAD);
+        assert_eq!((out, done), ([-7.0; 3], 99));
+        let mut settings = mlmap_settings_t::default();
+        // SAFETY: a decoded table and a settings struct.
+        assert_eq!(
+            unsafe { mlmap_settings(t, &mut settings) },
+            mlmap_status_t::MLMAP_OK
+        );
+        assert_eq!((settings.temperature, settings.epsilon), (0.0, 0.0));
+    }
 }
 
 #[test]

@@ -3,6 +3,9 @@
 //! its shape fits the library's maximum); every entry point, given a decoded table or
 //! not, NULL or real buffers of any length, logits and objectness of any value, returns
 //! a known status; on OK the scores are in `[0, OS]` and equal the batch entry point's.
+//! The open head answers `MLMAP_ERR_NO_OPEN_HEAD` exactly when the host table has none,
+//! its scores sum to at most OS, and `mlmap_settings` reports the host table's `T` and
+//! `epsilon`.
 #![no_main]
 
 use arbitrary::{Arbitrary, Unstructured};
@@ -75,6 +78,18 @@ fuzz_target!(|data: &[u8]| {
     // SAFETY: valid pointers; the storage holds a table or not (tag).
     let ks = unsafe { mlmap_class_count(t, &mut k) };
     assert_eq!(ks == MLMAP_OK, s == MLMAP_OK);
+    let mut has_open = false;
+    if s == MLMAP_OK {
+        let host = DynTable::from_bytes(table_bytes).expect("decoded by the C API");
+        let mut settings = mlmap_settings_t::default();
+        // SAFETY: a decoded table and a settings struct.
+        assert_eq!(unsafe { mlmap_settings(t, &mut settings) }, MLMAP_OK);
+        let open = host.open();
+        has_open = open.is_some();
+        let (temperature, epsilon) = open.map_or((0.0, 0.0), |o| (o.temperature(), o.epsilon()));
+        assert_eq!(settings.temperature.to_bits(), temperature.to_bits());
+        assert_eq!(settings.epsilon.to_bits(), epsilon.to_bits());
+    }
 
     let mut u = Unstructured::new(calls);
     for _ in 0..8 {
@@ -111,7 +126,7 @@ fuzz_target!(|data: &[u8]| {
         let mut done = usize::MAX;
         // SAFETY: every non-NULL pointer has the length passed with it.
         let (one, batch) = unsafe {
-            match c.head % 3 {
+            match c.head % 4 {
                 0 => (
                     mlmap_ml(table, lp, n_logits, c.objectness, op, out_len),
                     mlmap_ml_batch(table, lp, rows, n_logits, osp, op, out_len, &mut done),
@@ -120,29 +135,49 @@ fuzz_target!(|data: &[u8]| {
                     mlmap_map(table, lp, n_logits, c.objectness, op, out_len),
                     mlmap_map_batch(table, lp, rows, n_logits, osp, op, out_len, &mut done),
                 ),
-                _ => (
+                2 => (
                     mlmap_bayes(table, lp, n_logits, c.objectness, op, out_len),
                     mlmap_bayes_batch(table, lp, rows, n_logits, osp, op, out_len, &mut done),
+                ),
+                _ => (
+                    mlmap_open(table, lp, n_logits, c.objectness, op, out_len),
+                    mlmap_open_batch(table, lp, rows, n_logits, osp, op, out_len, &mut done),
                 ),
             }
         };
         assert!(known(one) && known(batch), "{one:?} {batch:?}");
+        if c.head % 4 == 3 {
+            // Only a table without the open head says so, and such a table always does
+            // once the arguments are right.
+            for r in [one, batch] {
+                assert!(r != MLMAP_ERR_NO_OPEN_HEAD || (s == MLMAP_OK && !has_open));
+            }
+            if s == MLMAP_OK && !has_open {
+                assert!(one != MLMAP_OK && batch != MLMAP_OK, "{one:?} {batch:?}");
+            }
+        }
         if one == MLMAP_OK {
             assert_eq!(n_logits, k);
             // The batch wrote its rows over `out`: score row 0 again to check it.
             let mut again = vec![0.0f32; k];
             // SAFETY: k logits, k outputs.
             let r = unsafe {
-                match c.head % 3 {
+                match c.head % 4 {
                     0 => mlmap_ml(table, lp, k, c.objectness, again.as_mut_ptr(), k),
                     1 => mlmap_map(table, lp, k, c.objectness, again.as_mut_ptr(), k),
-                    _ => mlmap_bayes(table, lp, k, c.objectness, again.as_mut_ptr(), k),
+                    2 => mlmap_bayes(table, lp, k, c.objectness, again.as_mut_ptr(), k),
+                    _ => mlmap_open(table, lp, k, c.objectness, again.as_mut_ptr(), k),
                 }
             };
             assert_eq!(r, MLMAP_OK);
             let os = c.objectness;
             for v in &again {
                 assert!(*v >= 0.0 && *v <= os, "score {v} outside [0, {os}]");
+            }
+            if c.head % 4 >= 2 {
+                // The Bayes and open heads: at most OS in all (DESIGN §1.6, §1.8).
+                let sum: f32 = again.iter().sum();
+                assert!(sum <= os * (1.0 + 1e-5), "scores sum to {sum} > {os}");
             }
             if batch == MLMAP_OK && rows > 0 && !c.null_objectness {
                 for (a, b) in again.iter().zip(&out) {
