@@ -103,9 +103,11 @@ fn accuracy_counts_the_decisions_of_the_tie_rule() {
         .find(|l| l.starts_with("accuracy "))
         .unwrap_or_else(|| panic!("no accuracy row:\n{text}"));
     let values: Vec<&str> = line.split_whitespace().skip(1).collect();
-    // sigmoid, softmax, ml, map (no temperature without --val).
-    assert_eq!(values.len(), 4, "{line}");
-    assert_eq!(&values[2..], ["0.7500", "0.7500"], "{line}");
+    // sigmoid, softmax, energy (a ranking only: no accuracy), ml, map (no temperature
+    // or isotonic regression without --val).
+    assert_eq!(values.len(), 5, "{line}");
+    assert_eq!(values[2], "-", "{line}");
+    assert_eq!(&values[3..], ["0.7500", "0.7500"], "{line}");
     let md = mlmap(
         d,
         &[

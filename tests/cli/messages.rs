@@ -181,17 +181,17 @@ fn a_tune_grid_past_the_cap_is_refused_before_reading() {
     assert_eq!(run.code, 2, "{run:?}");
     assert!(
         run.stderr
-            .contains("700001 lambdas (7.000 decades at 100000 per decade)"),
+            .contains("800001 lambdas (8.000 decades at 100000 per decade)"),
         "{run:?}"
     );
     assert!(run.stderr.contains("at most 20000"), "{run:?}");
     let run = mlmap(d, &[&base[..], &["--bins-ml", "1..65535"]].concat());
     assert_eq!(run.code, 2, "{run:?}");
-    // 65535 bin counts x 22 lambdas, plus 37 x 22 MAP and 37 x 22 Bayes candidates, and
-    // the open head's 50 epsilons.
+    // 65535 bin counts x 25 lambdas (1e-8 to 1, three per decade), plus 37 x 25 MAP and
+    // 37 x 25 Bayes candidates, and the open head's 50 epsilons.
     assert!(
         run.stderr
-            .contains("the grid holds 1443448 candidates (ml 1441770, map 814, bayes 814, open 50"),
+            .contains("the grid holds 1640275 candidates (ml 1638375, map 925, bayes 925, open 50"),
         "{run:?}"
     );
     assert!(run.stderr.contains("at most 20000"), "{run:?}");
