@@ -398,7 +398,7 @@ def quantization(data, table_crc):
     the table it names."""
     n, crc = struct.unpack("<II", data[-8:])
     sec = data[-n:]
-    if zlib.crc32(sec[:-4]) & 0xFFFFFFFF != crc or sec[:4] != b"MLMQ" or sec[4] != 1:
+    if zlib.crc32(sec[:-4]) & 0xFFFFFFFF != crc or sec[:4] != b"MLMQ" or sec[4] not in (1, 2):
         raise ValueError("not a valid quantized section")
     bits, flags = sec[5], sec[6]
     k, bins_ml = struct.unpack("<HH", sec[8:12])

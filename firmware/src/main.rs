@@ -382,14 +382,15 @@ fn check_quantized(r: &mut Report, name: &str, q: &EmbeddedQTable) {
         let got = q.bayes(&codes, os);
         let e = check_head(r, name, "int8 Bayes", &qc.case, got, &qc.case.bayes);
         r.max_err_bayes = r.max_err_bayes.max(e);
+        let got = q.open(&codes, os);
+        let e = check_open(r, name, "int8 open", &qc.case, got, &qc.case.open);
+        r.max_err_open = r.max_err_open.max(e);
         // Bit for bit the f32 table's scores on the dequantized logits.
         let x = qc.case.logits;
-        let got = TABLE.open(&x, os);
-        let e = check_open(r, name, "f32 open", &qc.case, got, &qc.case.open);
-        r.max_err_open = r.max_err_open.max(e);
         let exact = q.ml(&codes, os) == TABLE.ml(&x, os)
             && q.map(&codes, os) == TABLE.map(&x, os)
-            && q.bayes(&codes, os) == TABLE.bayes(&x, os);
+            && q.bayes(&codes, os) == TABLE.bayes(&x, os)
+            && q.open(&codes, os) == TABLE.open(&x, os);
         r.check(
             exact,
             qc.case.label,
