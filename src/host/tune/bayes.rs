@@ -5,13 +5,13 @@
 //! backend (the head's default on the device) on a table holding exactly the head the
 //! candidate would write, so they are bit for bit the written table's.
 
+use std::format;
 use std::prelude::rust_2021::*;
-use std::{format, vec};
 
 use super::{order, parallel, Candidate, HeadCandidates, Judge, TuneError, ValRows};
 use crate::host::fit::BayesCounts;
 use crate::host::DynTable;
-use crate::{FastMath, Head};
+use crate::Head;
 
 /// What [`search_bayes`] searches.
 ///
@@ -55,26 +55,7 @@ fn score(
         .clone()
         .with_bayes(counts.spec(lambda))
         .map_err(|e| format!("Bayes head with {bins} bins and lambda {lambda:e}: {e}"))?;
-    let val = &p.val;
-    let k = val.k;
-    let cats = table.bayes().map_or(k, |b| b.categories());
-    let (mut scores, mut scratch) = (vec![0.0f32; k], vec![0.0f32; cats]);
-    let mut acc = p.judge.accumulator(all);
-    if let Some(acc) = &mut acc {
-        let rows = val
-            .logits
-            .chunks_exact(k)
-            .zip(val.objectness)
-            .zip(val.labels);
-        for ((x, &os), &label) in rows {
-            if table
-                .bayes_into::<FastMath>(x, os, &mut scores, &mut scratch)
-                .is_ok()
-            {
-                acc.add(&scores, x, label);
-            }
-        }
-    }
+    let acc = super::accumulate(&table, Head::Bayes, &p.val, &p.judge, all);
     Ok(p.judge.candidate(acc.as_ref(), bins, lambda))
 }
 

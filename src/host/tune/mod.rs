@@ -300,6 +300,37 @@ impl Judge {
     }
 }
 
+/// Scores every validation row with `head` of `table` (the device's default backend, as
+/// `TableView::score_into`) into a new accumulator of `judge` (every metric with `all`);
+/// `None` when no accumulator can be made. Rows the layer refuses are left out.
+fn accumulate(
+    table: &crate::host::DynTable,
+    head: Head,
+    val: &ValRows<'_>,
+    judge: &Judge,
+    all: bool,
+) -> Option<Accumulator> {
+    let k = val.k;
+    let cats = table.bayes().map_or(k, |b| b.categories()).max(k);
+    let (mut scores, mut scratch) = (vec![0.0f32; k], vec![0.0f32; cats]);
+    let view = table.view();
+    let mut acc = judge.accumulator(all)?;
+    let rows = val
+        .logits
+        .chunks_exact(k)
+        .zip(val.objectness)
+        .zip(val.labels);
+    for ((x, &os), &label) in rows {
+        if view
+            .score_into(head, x, os, &mut scores, &mut scratch)
+            .is_ok()
+        {
+            acc.add(&scores, x, label);
+        }
+    }
+    Some(acc)
+}
+
 /// The order of candidates: eligible first, then the smaller excess, the objective,
 /// fewer bins, the smaller lambda and the smaller `epsilon`.
 fn order(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {

@@ -11,7 +11,7 @@ use std::prelude::rust_2021::*;
 
 use super::{order, parallel, Candidate, HeadCandidates, Judge, TuneError, ValRows};
 use crate::host::DynTable;
-use crate::{FastMath, Head};
+use crate::Head;
 
 /// The prior weights of the unknown category `tune` tries by default: 0 (no unknown
 /// category) and two per decade from `1e-16` to `1e8`.
@@ -58,26 +58,8 @@ fn score(p: &OpenSearchParams<'_>, epsilon: f32, all: bool) -> Result<Candidate,
             format!("open head with temperature {t:e} and epsilon {epsilon:e}: {e}")
         })?;
     let head = table.bayes().ok_or("the table has no Bayes head")?;
-    let (bins, lambda, cats) = (head.bins(), head.lambda(), head.categories());
-    let val = &p.val;
-    let k = val.k;
-    let (mut scores, mut scratch) = (vec![0.0f32; k], vec![0.0f32; cats]);
-    let mut acc = p.judge.accumulator(all);
-    if let Some(acc) = &mut acc {
-        let rows = val
-            .logits
-            .chunks_exact(k)
-            .zip(val.objectness)
-            .zip(val.labels);
-        for ((x, &os), &label) in rows {
-            if table
-                .open_into::<FastMath>(x, os, &mut scores, &mut scratch)
-                .is_ok()
-            {
-                acc.add(&scores, x, label);
-            }
-        }
-    }
+    let (bins, lambda) = (head.bins(), head.lambda());
+    let acc = super::accumulate(&table, Head::Open, &p.val, &p.judge, all);
     Ok(Candidate {
         temperature: Some(t),
         epsilon: Some(epsilon),
