@@ -845,6 +845,19 @@ fn compared(m: &mlmap::host::metrics::Metrics, key: &str) -> Option<f64> {
         "mean_ap" => m.mean_ap(),
         "auroc" => m.auroc,
         "ood_mean" => m.ood.map(|o| o.ood_mean),
+        "ood_auroc" => m.ood.and_then(|o| o.auroc),
+        "ood_fpr95" => m.ood.and_then(|o| o.fpr95),
+        _ => None,
+    }
+    .filter(|v| v.is_finite())
+}
+
+/// The energy score's value of `key` in the comparison: its ranking metrics only.
+fn energy_compared(r: &mlmap::host::eval::Ranking, key: &str) -> Option<f64> {
+    match key {
+        "auroc" => r.auroc,
+        "ood_auroc" => r.ood_auroc,
+        "ood_fpr95" => r.ood_fpr95,
         _ => None,
     }
     .filter(|v| v.is_finite())
@@ -888,13 +901,13 @@ fn tune_report<'py>(
     }
     let c = &tuned.comparison;
     let methods = PyDict::new(py);
+    let mut keys = COMPARED.to_vec();
+    if c.ood_rows.is_some() {
+        keys.extend(["ood_mean", "ood_auroc", "ood_fpr95"]);
+    }
     for m in &c.methods {
         let d = PyDict::new(py);
-        let mut keys = COMPARED.to_vec();
-        if c.ood_rows.is_some() {
-            keys.push("ood_mean");
-        }
-        for key in keys {
+        for &key in &keys {
             d.set_item(key, compared(&m.metrics, key))?;
         }
         if let Some(ch) = &m.chosen {
@@ -908,6 +921,11 @@ fn tune_report<'py>(
         }
         methods.set_item(m.method.name(), d)?;
     }
+    let energy = PyDict::new(py);
+    for &key in &keys {
+        energy.set_item(key, energy_compared(&c.energy, key))?;
+    }
+    methods.set_item(mlmap::host::eval::Method::Energy.name(), energy)?;
     let v = PyDict::new(py);
     v.set_item("rows", c.rows)?;
     v.set_item("ood_rows", c.ood_rows)?;
