@@ -17,8 +17,9 @@
 //! exactly 1 and the scores are bit for bit that layer's.
 //!
 //! Why `m` leaves the unknown out: for one detection, `e^(l_u - m)` then depends on
-//! `epsilon` alone, through `ln` and `exp`, both non-decreasing, so raising `epsilon`
-//! never raises a score, not even by a rounding step; an `e^(l_u - m)` that overflows is
+//! `epsilon` alone, through libm's `logf` and `expf`, both non-decreasing (checked for
+//! every `f32`; the unknown's term uses libm whatever the backend of the rest), so
+//! raising `epsilon` never raises a score, not even by a rounding step; an `e^(l_u - m)` that overflows is
 //! `+inf`, and `q` is then 0, which is what its true value (below `K / 3.4e38`) rounds to.
 
 use crate::baseline;
@@ -133,11 +134,13 @@ fn known_share<M: Backend>(l: &[f32], k: usize, log_unknown: f32) -> f32 {
         }
     }
     // No unknown category when epsilon = 0 (`log_unknown = -inf`): its term is 0, which
-    // is what exp(-inf) gives, without the call.
+    // is what exp(-inf) gives, without the call. Otherwise libm's `expf` whatever `M`:
+    // it never decreases (checked for every f32), so neither does this term in epsilon;
+    // `FastMath`'s `exp` steps down by an ulp at a few arguments.
     let unknown = if log_unknown == f32::NEG_INFINITY {
         0.0
     } else {
-        M::exp(log_unknown - max)
+        math::exp(log_unknown - max)
     };
     // `known + rest >= 1` (the largest category contributes 1), so the denominator is
     // never 0, and `known <= known + rest <= denominator` keeps q in [0, 1].
