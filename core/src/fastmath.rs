@@ -435,7 +435,10 @@ mod tests {
         assert_eq!(first_decrease(ln, up), None, "libm logf decreases");
         // The step of FastMath's exp that rules it out.
         let x = -0.249_997_48f32;
-        assert!(fast(x.next_up()) < fast(x), "FastMath's exp became monotone there");
+        assert!(
+            fast(x.next_up()) < fast(x),
+            "FastMath's exp became monotone there"
+        );
     }
 
     #[test]
