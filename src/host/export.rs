@@ -278,7 +278,7 @@ pub const C_ARRAY_ALIGN: usize = 8;
 /// ```
 /// let bytes = include_bytes!("../../tables/default.mlmap");
 /// let h = mlmap::host::export::c_header(bytes, "calib_table", "default.mlmap")?;
-/// assert!(h.contains("#define CALIB_TABLE_LEN 1696u"));
+/// assert!(h.contains("#define CALIB_TABLE_LEN 1704u"));
 /// assert!(h.contains("extern const uint8_t calib_table[CALIB_TABLE_LEN];"));
 /// assert!(h.contains("#if defined(CALIB_TABLE_IMPLEMENTATION)"));
 /// # Ok::<(), mlmap::host::export::ExportError>(())
