@@ -41,7 +41,6 @@ section "toolchain for $THUMB_TARGET"
 thumb_acquire
 if [[ "$THUMB_VIA" == none ]]; then
     thumb_skipped_banner "the firmware run on the emulated Cortex-M4F"
-    exit 0
 fi
 echo "toolchain: $THUMB_VIA"
 

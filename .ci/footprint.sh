@@ -26,7 +26,6 @@ section "toolchain for $THUMB_TARGET"
 thumb_acquire
 if [[ "$THUMB_VIA" == none ]]; then
     thumb_skipped_banner "the footprint measurement on $THUMB_TARGET"
-    exit 0
 fi
 echo "toolchain: $THUMB_VIA"
 
@@ -60,8 +59,8 @@ if ! SIZE=$(llvm_tool size) || ! NM=$(llvm_tool nm) || ! READOBJ=$(llvm_tool rea
             llvm-14 >/dev/null; } || true
     if ! SIZE=$(llvm_tool size) || ! NM=$(llvm_tool nm) || ! READOBJ=$(llvm_tool readobj) ||
         ! OBJDUMP=$(llvm_tool objdump); then
-        echo "footprint: SKIPPED: no llvm-size/llvm-nm/llvm-readobj/llvm-objdump found"
-        exit 0
+        proof_not_run "the Cortex-M4F footprint" \
+            "no llvm-size/llvm-nm/llvm-readobj/llvm-objdump (rustup llvm-tools or Debian llvm-14)"
     fi
 fi
 echo "tools: $SIZE, $READOBJ"
@@ -162,9 +161,7 @@ paste -d' ' <("$NM" -p "$stack" | awk '{ print $NF }') \
         if (t !~ /^\$/ && t !~ /\+0x/ && t != f) print f, t
     }' | sort -u >"$calls"
 if ! command -v python3 >/dev/null; then
-    echo "frames (bytes), largest first (python3 not found: no call chains):"
-    sort -rn "$frames" | head -n 10
-    exit 0
+    proof_not_run "the stack call chains" "python3 not found"
 fi
 report=$(python3 - "$frames" "$calls" "$calls.names" <<'PY'
 import sys

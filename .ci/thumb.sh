@@ -18,7 +18,6 @@ section "toolchain for $THUMB_TARGET"
 thumb_acquire
 if [[ "$THUMB_VIA" == none ]]; then
     thumb_skipped_banner "the thumbv7em-none-eabihf builds of the library"
-    exit 0
 fi
 echo "toolchain: $THUMB_VIA"
 
