@@ -73,10 +73,10 @@ pub use mlmap_core::{
     argmax, check_class_name, check_class_names, decide, refused_char, scores_from_evidence, Axis,
     Backend, BatchError, BayesView, Bounded, BoundedTable, CharKind, ClassName, ClassSpec,
     DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head, Histogram, HistogramError,
-    InferError, Libm, NameError, OpenParams, Scores, Settings, Table, TableError, TableView,
-    UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON, MAX_LAMBDA,
-    MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX, NAME_RULE_VERSION,
-    VARIANCE_FLOOR,
+    InferError, Knot, Libm, MapError, NameError, OpenParams, RecalMap, Scores, Settings, Table,
+    TableError, TableView, UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON,
+    MAX_KNOTS, MAX_LAMBDA, MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX,
+    NAME_RULE_VERSION, VARIANCE_FLOOR,
 };
 
 pub mod embedded;

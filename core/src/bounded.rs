@@ -14,6 +14,7 @@ use crate::gaussian::Gaussian;
 use crate::histogram::{Axis, Histogram};
 use crate::name::ClassName;
 use crate::open::OpenParams;
+use crate::recal::{Knot, Maps, MAX_KNOTS};
 use crate::view::{BayesStorage, Slots, TableView};
 use crate::wire::{self, Settings};
 
@@ -142,6 +143,7 @@ pub struct BoundedTable<
     const B_MAP: usize,
     const B_BAYES: usize,
     const C: usize,
+    const N: usize = 0,
 > {
     /// Classes in use; 0 for an empty table.
     k: usize,
@@ -166,6 +168,10 @@ pub struct BoundedTable<
     bayes_lambda: f32,
     bayes_log_lambda: f32,
     bayes_open: Option<OpenParams>,
+    /// Room for each head's recalibration map (DESIGN §1.9): ML, MAP, Bayes, open.
+    recal: [[Knot; N]; 4],
+    /// Knots in use in each of `recal` (0: no map).
+    recal_len: [u8; 4],
 }
 
 impl<
@@ -174,7 +180,8 @@ impl<
         const B_MAP: usize,
         const B_BAYES: usize,
         const C: usize,
-    > BoundedTable<K, B_ML, B_MAP, B_BAYES, C>
+        const N: usize,
+    > BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N>
 {
     const SHAPE_OK: () = assert!(
         K >= 2
@@ -185,9 +192,11 @@ impl<
             && B_MAP <= u16::MAX as usize
             && B_BAYES <= u16::MAX as usize
             && C <= u16::MAX as usize
-            && ((B_BAYES == 0) == (C == 0)),
+            && ((B_BAYES == 0) == (C == 0))
+            && N <= MAX_KNOTS,
         "a BoundedTable holds up to 2..65535 classes and 1..=65535 bins per head; \
-         B_BAYES and C are both 0 (no Bayes head) or both positive"
+         B_BAYES and C are both 0 (no Bayes head) or both positive; at most MAX_KNOTS \
+         knots per map"
     );
 
     /// The largest `(K, ML bins, MAP bins)` this type holds, as reported by
@@ -199,7 +208,7 @@ impl<
     pub const MAX_BAYES_SHAPE: (u16, u16) = (B_BAYES as u16, C as u16);
 
     /// Largest number of bytes the encoding of a table of this type takes.
-    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C);
+    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C, N);
 
     /// An empty table (all zeros).
     pub const fn new() -> Self {
@@ -232,6 +241,8 @@ impl<
             bayes_lambda: 0.0,
             bayes_log_lambda: 0.0,
             bayes_open: None,
+            recal: [[Knot::ZERO; N]; 4],
+            recal_len: [0; 4],
         }
     }
 
@@ -279,6 +290,7 @@ impl<
         self.bayes_bins = 0;
         self.bayes_categories = 0;
         self.bayes_terms_len = 0;
+        self.recal_len = [0; 4];
     }
 
     /// Whether the table holds no table.
@@ -322,7 +334,22 @@ impl<
             map: self.map.get(..k)?,
             bayes,
             settings: &self.settings,
+            maps: Maps([
+                self.recal_slice(0),
+                self.recal_slice(1),
+                self.recal_slice(2),
+                self.recal_slice(3),
+            ]),
         })
+    }
+
+    /// The knots in use in map slot `slot`.
+    fn recal_slice(&self, slot: usize) -> &[Knot] {
+        let len = self.recal_len.get(slot).map_or(0, |&n| usize::from(n));
+        self.recal
+            .get(slot)
+            .and_then(|k| k.get(..len))
+            .unwrap_or_default()
     }
 
     /// [`BoundedTable::decode`] on a cleared table.
@@ -371,7 +398,8 @@ impl<
         }
         let mut raw_names = [""; K];
         let mut lens = [(0, 0); K];
-        Slots {
+        let [r0, r1, r2, r3] = &mut self.recal;
+        let knots = Slots {
             names: self.names.get_mut(..k).ok_or(malformed)?,
             raw_names: raw_names.get_mut(..k).ok_or(malformed)?,
             lens: lens.get_mut(..k).ok_or(malformed)?,
@@ -401,10 +429,15 @@ impl<
             } else {
                 None
             },
+            recal: [r0, r1, r2, r3],
         }
         .decode(&header, body)?;
         if k < 2 {
             return Err(TableError::ClassCount.into());
+        }
+        for (len, n) in self.recal_len.iter_mut().zip(knots) {
+            // At most MAX_KNOTS (checked by the decoder).
+            *len = u8::try_from(n).unwrap_or(0);
         }
         (self.k, self.bayes_bins, self.bayes_categories) = (k, bins_bayes, categories);
         self.bayes_terms_len = terms;
@@ -419,7 +452,8 @@ impl<
         const B_MAP: usize,
         const B_BAYES: usize,
         const C: usize,
-    > Default for BoundedTable<K, B_ML, B_MAP, B_BAYES, C>
+        const N: usize,
+    > Default for BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N>
 {
     fn default() -> Self {
         Self::new()

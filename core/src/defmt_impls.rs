@@ -42,7 +42,34 @@ impl Format for TableError {
             Self::BayesShape => write!(f, "Bayes head shape inconsistent"),
             Self::Temperature => write!(f, "open head: temperature out of range"),
             Self::Epsilon => write!(f, "open head: epsilon out of range"),
+            Self::Map { head, error } => {
+                write!(f, "recalibration map of the {} head: {}", head, error)
+            }
         }
+    }
+}
+
+impl Format for crate::MapError {
+    fn format(&self, f: Formatter<'_>) {
+        match self {
+            Self::KnotCount => write!(f, "knot count out of range"),
+            Self::Ends => write!(f, "ends not at 0 and 1"),
+            Self::Order => write!(f, "knots not increasing"),
+            Self::Values => write!(f, "values out of [0, 1] or decreasing"),
+            Self::NoHead => write!(f, "no such head"),
+        }
+    }
+}
+
+impl Format for crate::Knot {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "({}, {})", self.x, self.y)
+    }
+}
+
+impl Format for crate::RecalMap<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "RecalMap {{ knots: {=[?]} }}", self.knots())
     }
 }
 
@@ -90,6 +117,15 @@ impl Format for DecodeError {
                     expected, found
                 )
             }
+            Self::MapCapacity {
+                head,
+                capacity,
+                found,
+            } => write!(
+                f,
+                "MapCapacity({} head: {} knots, room for {})",
+                head, found, capacity
+            ),
             Self::Malformed => write!(f, "Malformed"),
             Self::Invalid(e) => write!(f, "Invalid({})", e),
         }
@@ -189,7 +225,8 @@ impl<
         const B_MAP: usize,
         const B_BAYES: usize,
         const C: usize,
-    > Format for Table<K, B_ML, B_MAP, B_BAYES, C>
+        const N: usize,
+    > Format for Table<K, B_ML, B_MAP, B_BAYES, C, N>
 {
     fn format(&self, f: Formatter<'_>) {
         write!(

@@ -7,12 +7,13 @@ use alloc::vec;
 use alloc::vec::Vec;
 
 use crate::bayes::{self, BayesView};
-use crate::error::{DecodeError, EncodeError, InferError, TableError};
+use crate::error::{DecodeError, EncodeError, Head, InferError, MapError, TableError};
 use crate::gaussian::Gaussian;
 use crate::histogram::{Axis, Histogram};
 use crate::math::Backend;
 use crate::name::ClassName;
 use crate::open::OpenParams;
+use crate::recal::{self, head_slot, Knot, Maps, RecalMap, MAX_KNOTS};
 use crate::view::{self, BayesStorage, Slots, TableView};
 use crate::wire::{self, ClassSpec, Settings};
 
@@ -30,6 +31,8 @@ pub struct DynTable {
     map: Vec<Histogram<Vec<f32>>>,
     settings: Settings,
     bayes: Option<DynBayes>,
+    /// Each head's recalibration map (DESIGN §1.9), ML, MAP, Bayes, open; empty: none.
+    maps: [Vec<Knot>; 4],
 }
 
 /// The Bayes head's storage.
@@ -83,6 +86,7 @@ impl DynTable {
             map: Vec::with_capacity(classes.len()),
             settings,
             bayes: None,
+            maps: Default::default(),
         };
         for (i, spec) in classes.into_iter().enumerate() {
             let c = spec.validate(i, bins_ml, bins_map)?;
@@ -143,10 +147,73 @@ impl DynTable {
         Ok(self)
     }
 
-    /// The table without its Bayes head.
+    /// The table without its Bayes head (and without the maps of the Bayes and open
+    /// heads).
     pub fn without_bayes(mut self) -> Self {
         self.bayes = None;
+        self.clear_map(Head::Bayes);
+        self.clear_map(Head::Open);
         self
+    }
+
+    /// The table with `knots` as the recalibration map of `head` (DESIGN §1.9), in place
+    /// of any map it had. The table is then written as format version 4.
+    ///
+    /// # Errors
+    ///
+    /// [`TableError::Map`] when the knots break the rule of §1.9 or the table has no
+    /// such head; [`TableError::Name`] when a class name breaks the rule of DESIGN §6.15
+    /// (a table decoded from a version-1 or version-2 file may hold one).
+    pub fn with_map(mut self, head: Head, knots: Vec<Knot>) -> Result<Self, TableError> {
+        let map_err = |error| TableError::Map { head, error };
+        let present = match head {
+            Head::Ml | Head::Map => true,
+            Head::Bayes => self.bayes.is_some(),
+            Head::Open => self.open().is_some(),
+        };
+        if !present {
+            return Err(map_err(MapError::NoHead));
+        }
+        recal::check(&knots).map_err(map_err)?;
+        self.check_names()?;
+        if let Some(slot) = self.maps.get_mut(head_slot(head)) {
+            *slot = knots;
+        }
+        Ok(self)
+    }
+
+    /// The table without the recalibration map of `head`.
+    pub fn without_map(mut self, head: Head) -> Self {
+        self.clear_map(head);
+        self
+    }
+
+    /// The table without any recalibration map: the heads' own scores.
+    pub fn without_maps(mut self) -> Self {
+        self.maps = Default::default();
+        self
+    }
+
+    /// The recalibration map of `head`, if the table holds one.
+    pub fn recal_map(&self, head: Head) -> Option<RecalMap<'_>> {
+        self.view().recal_map(head)
+    }
+
+    fn clear_map(&mut self, head: Head) {
+        if let Some(slot) = self.maps.get_mut(head_slot(head)) {
+            slot.clear();
+        }
+    }
+
+    /// Checks every class name against the whole rule of DESIGN §6.15, which format
+    /// versions 3 and 4 require.
+    fn check_names(&self) -> Result<(), TableError> {
+        crate::name::check_class_names(self.names.iter().map(ClassName::as_str)).map_err(
+            |(i, error)| TableError::Name {
+                class: u16::try_from(i).unwrap_or(u16::MAX),
+                error,
+            },
+        )
     }
 
     /// The table with the open head (DESIGN §1.8): its temperature `T` and the prior
@@ -163,12 +230,7 @@ impl DynTable {
     pub fn with_open(mut self, temperature: f32, epsilon: f32) -> Result<Self, TableError> {
         // A version-3 file holds only names of the rule of DESIGN §6.15: a table decoded
         // from an older file with another name cannot become one.
-        crate::name::check_class_names(self.names.iter().map(ClassName::as_str)).map_err(
-            |(i, error)| TableError::Name {
-                class: u16::try_from(i).unwrap_or(u16::MAX),
-                error,
-            },
-        )?;
+        self.check_names()?;
         let k = self.k();
         let b = self.bayes.as_mut().ok_or(TableError::BayesShape)?;
         let bins = b.axes.first().map_or(0, Axis::bins);
@@ -176,11 +238,13 @@ impl DynTable {
         Ok(self)
     }
 
-    /// The table without its open head (a version-2 table if it has a Bayes head).
+    /// The table without its open head (a version-2 table if it has a Bayes head and no
+    /// map), and without that head's map.
     pub fn without_open(mut self) -> Self {
         if let Some(b) = self.bayes.as_mut() {
             b.open = None;
         }
+        self.clear_map(Head::Open);
         self
     }
 
@@ -229,10 +293,12 @@ impl DynTable {
                 log_lambda: 0.0,
                 open: None,
             }),
+            maps: core::array::from_fn(|_| vec![Knot::ZERO; MAX_KNOTS]),
         };
         let mut raw_names = vec![""; k];
         let mut lens = vec![(0, 0); k];
-        Slots {
+        let [r0, r1, r2, r3] = &mut t.maps;
+        let knots = Slots {
             names: &mut t.names,
             raw_names: &mut raw_names,
             lens: &mut lens,
@@ -250,8 +316,12 @@ impl DynTable {
                 log_lambda: &mut b.log_lambda,
                 open: &mut b.open,
             }),
+            recal: [r0, r1, r2, r3],
         }
         .decode(&header, body)?;
+        for (map, n) in t.maps.iter_mut().zip(knots) {
+            map.truncate(n);
+        }
         if k < 2 {
             return Err(TableError::ClassCount.into());
         }
@@ -278,6 +348,9 @@ impl DynTable {
                 open: b.open,
             }),
             settings: &self.settings,
+            maps: Maps(core::array::from_fn(|h| {
+                self.maps.get(h).map_or(&[][..], Vec::as_slice)
+            })),
         }
     }
 
@@ -430,8 +503,9 @@ impl DynTable {
         const B_MAP: usize,
         const B_BAYES: usize,
         const C: usize,
+        const N: usize,
     >(
-        t: &crate::Table<K, B_ML, B_MAP, B_BAYES, C>,
+        t: &crate::Table<K, B_ML, B_MAP, B_BAYES, C, N>,
     ) -> Self {
         let v = t.view();
         Self {
@@ -450,6 +524,7 @@ impl DynTable {
                 log_lambda: b.log_lambda,
                 open: b.open,
             }),
+            maps: v.maps.0.map(<[Knot]>::to_vec),
         }
     }
 }
@@ -470,7 +545,8 @@ impl<
         const B_MAP: usize,
         const B_BAYES: usize,
         const C: usize,
-    > TryFrom<&DynTable> for crate::Table<K, B_ML, B_MAP, B_BAYES, C>
+        const N: usize,
+    > TryFrom<&DynTable> for crate::Table<K, B_ML, B_MAP, B_BAYES, C, N>
 {
     type Error = DecodeError;
 

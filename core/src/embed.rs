@@ -4,7 +4,7 @@
 
 use crate::histogram::{Axis, Histogram};
 use crate::qtable::{Code, Meta, QClass, QLogit, QTable};
-use crate::{ClassName, Gaussian, OpenParams, Settings, Table};
+use crate::{ClassName, Gaussian, Knot, OpenParams, Settings, Table};
 
 /// A histogram from validated fields.
 pub const fn histogram<F>(lo: f32, hi: f32, width: f32, inv_width: f32, freqs: F) -> Histogram<F> {
@@ -52,6 +52,7 @@ pub const fn table<
     const B_MAP: usize,
     const B_BAYES: usize,
     const C: usize,
+    const N: usize,
 >(
     names: [ClassName; K],
     rows: [u64; K],
@@ -66,7 +67,9 @@ pub const fn table<
     bayes_lambda: f32,
     bayes_log_lambda: f32,
     bayes_open: Option<OpenParams>,
-) -> Table<K, B_ML, B_MAP, B_BAYES, C> {
+    recal: [[Knot; N]; 4],
+    recal_len: [u8; 4],
+) -> Table<K, B_ML, B_MAP, B_BAYES, C, N> {
     Table {
         names,
         rows,
@@ -81,7 +84,14 @@ pub const fn table<
         bayes_lambda,
         bayes_log_lambda,
         bayes_open,
+        recal,
+        recal_len,
     }
+}
+
+/// A knot of a recalibration map as validated by the build script.
+pub const fn knot(x: f32, y: f32) -> Knot {
+    Knot { x, y }
 }
 
 /// The open head's parameters as validated by the build script.

@@ -53,6 +53,7 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
     let k = v.k();
     let bayes = v.bayes();
     let (bins_bayes, categories) = bayes.map_or((0, 0), |b| (b.bins(), b.categories()));
+    let knots = v.maps.0.iter().map(|m| m.len()).max().unwrap_or(0);
     let mut s = String::new();
     let _ = writeln!(s, "use {krate}::__embed as E;");
     let consts = [
@@ -69,13 +70,18 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
             "CATEGORIES",
             categories,
         ),
+        (
+            "Knots per recalibration map of the embedded table (0: no map).",
+            "MAP_KNOTS",
+            knots,
+        ),
     ];
     for (doc, name, value) in consts {
         let _ = writeln!(s, "/// {doc}\npub const {name}: usize = {value};");
     }
     let _ = writeln!(
         s,
-        "/// The type of [`TABLE`].\npub type EmbeddedTable = {krate}::Table<K, BINS_ML, BINS_MAP, BINS_BAYES, CATEGORIES>;"
+        "/// The type of [`TABLE`].\npub type EmbeddedTable = {krate}::Table<K, BINS_ML, BINS_MAP, BINS_BAYES, CATEGORIES, MAP_KNOTS>;"
     );
     let _ = writeln!(
         s,
@@ -159,12 +165,26 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
             "0.0".into(),
         ),
     };
+    let maps: Vec<String> = v
+        .maps
+        .0
+        .iter()
+        .map(|m| {
+            let mut pairs: Vec<String> = m
+                .iter()
+                .map(|p| format!("E::knot({}, {})", f(p.x), f(p.y)))
+                .collect();
+            pairs.resize(knots, "E::knot(0.0, 0.0)".into());
+            format!("[{}]", pairs.join(", "))
+        })
+        .collect();
+    let map_lens: Vec<String> = v.maps.0.iter().map(|m| format!("{}", m.len())).collect();
     let _ = writeln!(
         s,
         "/// The validated table, ready to score: no decoding at start-up.\n\
          pub static TABLE: EmbeddedTable = E::table(\n    [{}],\n    {:?},\n    [{}],\n    [{}],\n    [{}],\n    \
          {krate}::Settings {{ lambda_ml: {}, lambda_map: {}, edge_mode: {krate}::EdgeMode::{edge}, \
-         upper_tail: {krate}::UpperTail::{tail} }},\n    {axes},\n    {terms},\n    {brows},\n    {log_prior},\n    {lambda},\n    {log_lambda},\n    {open},\n);",
+         upper_tail: {krate}::UpperTail::{tail} }},\n    {axes},\n    {terms},\n    {brows},\n    {log_prior},\n    {lambda},\n    {log_lambda},\n    {open},\n    [{}],\n    [{}],\n);",
         names.join(", "),
         v.rows,
         priors.join(", "),
@@ -172,6 +192,8 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
         map.join(",\n        "),
         f(st.lambda_ml),
         f(st.lambda_map),
+        maps.join(",\n        "),
+        map_lens.join(", "),
     );
     s
 }

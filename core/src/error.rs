@@ -110,6 +110,14 @@ pub enum TableError {
     /// The open head's `epsilon` is not 0 and not in
     /// `[f32::MIN_POSITIVE, MAX_EPSILON]` (DESIGN §1.8).
     Epsilon,
+    /// A head's recalibration map breaks the rule of DESIGN §1.9, or is stored for a
+    /// head the table does not have.
+    Map {
+        /// The head the map is for.
+        head: Head,
+        /// The rule broken.
+        error: MapError,
+    },
 }
 
 impl fmt::Display for TableError {
@@ -164,11 +172,42 @@ impl fmt::Display for TableError {
                 f32::MIN_POSITIVE,
                 crate::MAX_EPSILON
             ),
+            Self::Map { head, error } => write!(f, "recalibration map of the {head} head: {error}"),
         }
     }
 }
 
 impl core::error::Error for TableError {}
+
+/// Why a recalibration map's knots break the rule of DESIGN §1.9.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum MapError {
+    /// Fewer than 2 or more than [`MAX_KNOTS`](crate::MAX_KNOTS) knots.
+    KnotCount,
+    /// The first knot is not at `x = 0` or the last not at `x = 1`.
+    Ends,
+    /// The knots' `x` are not strictly increasing (or one is NaN).
+    Order,
+    /// A `y` is outside `[0, 1]` (or NaN, or `-0.0`), or the `y` decrease.
+    Values,
+    /// The table has no such head.
+    NoHead,
+}
+
+impl fmt::Display for MapError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::KnotCount => "it needs between 2 and 32 knots",
+            Self::Ends => "its first knot is not at 0 or its last not at 1",
+            Self::Order => "its knots are not strictly increasing in x",
+            Self::Values => "its values are not in [0, 1] and non-decreasing",
+            Self::NoHead => "the table has no such head",
+        })
+    }
+}
+
+impl core::error::Error for MapError {}
 
 /// Why a byte string could not become a table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -200,6 +239,16 @@ pub enum DecodeError {
         /// `(Bayes bins, categories)` stored in the table, `(0, 0)` for none.
         found: (u16, u16),
     },
+    /// The table holds a recalibration map with more knots than the type it is decoded
+    /// into has room for (its `M` parameter; 0 for a type without maps).
+    MapCapacity {
+        /// The head the map is for.
+        head: Head,
+        /// Knots per map the destination type holds.
+        capacity: u16,
+        /// Knots stored in the table.
+        found: u16,
+    },
     /// The checksum matched, but the body does not follow the format (a field is
     /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over, a
     /// varint is not in its shortest form).
@@ -228,6 +277,10 @@ impl fmt::Display for DecodeError {
                 f,
                 "table has a Bayes head of {} bins and {} categories; expected {} and {} (0 and 0: none)",
                 found.0, found.1, expected.0, expected.1
+            ),
+            Self::MapCapacity { head, capacity, found } => write!(
+                f,
+                "table has a recalibration map of {found} knots for the {head} head; the table type holds {capacity}"
             ),
             Self::Malformed => f.write_str("table body does not follow the mlmap format"),
             Self::Invalid(e) => write!(f, "invalid table: {e}"),

@@ -43,8 +43,8 @@ pub mod __embed_source {
 pub mod __embed {
     //! `const` constructors for build-script output; not part of the API.
     pub use crate::embed::{
-        axis, class_name, gaussian, histogram, open, part, part4, qclass, qlogit, qmeta, qtable,
-        table, QLOGIT_NONE,
+        axis, class_name, gaussian, histogram, knot, open, part, part4, qclass, qlogit, qmeta,
+        qtable, table, QLOGIT_NONE,
     };
 }
 mod embed;
@@ -62,13 +62,14 @@ mod qtable;
 mod qtable_build;
 #[cfg(feature = "alloc")]
 mod qtable_dyn;
+mod recal;
 mod table;
 mod view;
 mod wire;
 
 pub use bayes::{BayesView, MAX_LAMBDA_BAYES};
 pub use bounded::{Bounded, BoundedTable};
-pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
+pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, MapError, TableError};
 pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
 pub use histogram::{
     Axis, EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE,
@@ -85,6 +86,7 @@ pub use qtable::{
     QUANTIZED_MAGIC, QUANTIZED_VERSION,
 };
 pub use qtable_build::{quantize_into, quantized_len, QParams, QuantizeError};
+pub use recal::{Knot, RecalMap, MAX_KNOTS};
 pub use table::Table;
 pub use view::TableView;
 pub use wire::{ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};

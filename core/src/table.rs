@@ -3,13 +3,14 @@
 //! [`TableView`] it lends them to.
 
 use crate::bayes::BayesView;
-use crate::error::{BatchError, DecodeError, EncodeError, InferError, TableError};
+use crate::error::{BatchError, DecodeError, EncodeError, Head, InferError, TableError};
 use crate::gaussian::Gaussian;
 use crate::histogram::{Axis, Histogram};
 use crate::layer::Scores;
 use crate::math::Backend;
 use crate::name::ClassName;
 use crate::open::OpenParams;
+use crate::recal::{Knot, Maps, RecalMap, MAX_KNOTS};
 use crate::view::{self, BayesBackend, BayesStorage, MapBackend, OpenBackend, Slots, TableView};
 use crate::wire::{self, ClassSpec, Settings};
 
@@ -62,6 +63,7 @@ pub struct Table<
     const B_MAP: usize,
     const B_BAYES: usize = 0,
     const C: usize = 0,
+    const N: usize = 0,
 > {
     pub(crate) names: [ClassName; K],
     pub(crate) rows: [u64; K],
@@ -79,6 +81,10 @@ pub struct Table<
     pub(crate) bayes_log_lambda: f32,
     /// The open head's parameters (DESIGN §1.8), `None` without that head.
     pub(crate) bayes_open: Option<OpenParams>,
+    /// Room for each head's recalibration map (DESIGN §1.9), ML, MAP, Bayes, open.
+    pub(crate) recal: [[Knot; N]; 4],
+    /// Knots in use in each of `recal` (0: no map).
+    pub(crate) recal_len: [u8; 4],
 }
 
 impl<
@@ -87,11 +93,12 @@ impl<
         const B_MAP: usize,
         const B_BAYES: usize,
         const C: usize,
-    > Table<K, B_ML, B_MAP, B_BAYES, C>
+        const N: usize,
+    > Table<K, B_ML, B_MAP, B_BAYES, C, N>
 {
     /// Largest number of bytes [`Table::to_slice`] writes for this shape; size a static
     /// buffer with it.
-    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C);
+    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C, N);
 
     const SHAPE_OK: () = assert!(
         K >= 2
@@ -101,9 +108,11 @@ impl<
             && B_MAP >= 1
             && B_MAP <= u16::MAX as usize
             && B_BAYES <= u16::MAX as usize
-            && ((B_BAYES == 0 && C == 0) || (B_BAYES >= 1 && (C == K || C == K + 1))),
-        "a Table needs 2..65535 classes, 1..=65535 bins per head, and either no Bayes head \
-         (B_BAYES = C = 0) or one with K or K + 1 categories"
+            && ((B_BAYES == 0 && C == 0) || (B_BAYES >= 1 && (C == K || C == K + 1)))
+            && N <= MAX_KNOTS,
+        "a Table needs 2..65535 classes, 1..=65535 bins per head, either no Bayes head \
+         (B_BAYES = C = 0) or one with K or K + 1 categories, and at most MAX_KNOTS knots \
+         per map"
     );
 
     /// `(K, B_ML, B_MAP)` as stored in a table header.
@@ -132,6 +141,17 @@ impl<
                 open: self.bayes_open,
             }),
             settings: &self.settings,
+            maps: if N == 0 {
+                Maps::NONE
+            } else {
+                Maps(core::array::from_fn(|h| {
+                    let len = self.recal_len.get(h).map_or(0, |&n| usize::from(n));
+                    self.recal
+                        .get(h)
+                        .and_then(|k| k.get(..len))
+                        .unwrap_or_default()
+                }))
+            },
         }
     }
 
@@ -238,7 +258,8 @@ impl<
         let mut table = Self::placeholder(Settings::ZERO);
         let mut raw_names = [""; K];
         let mut lens = [(0, 0); K];
-        Slots {
+        let [r0, r1, r2, r3] = &mut table.recal;
+        let knots = Slots {
             names: &mut table.names,
             raw_names: &mut raw_names,
             lens: &mut lens,
@@ -256,8 +277,13 @@ impl<
                 log_lambda: &mut table.bayes_log_lambda,
                 open: &mut table.bayes_open,
             }),
+            recal: [r0, r1, r2, r3],
         }
         .decode(&header, body)?;
+        for (len, n) in table.recal_len.iter_mut().zip(knots) {
+            // At most MAX_KNOTS (checked by the decoder).
+            *len = u8::try_from(n).unwrap_or(0);
+        }
         wire::check_canonical(bytes.len(), &table.view())?;
         Ok(table)
     }
@@ -311,6 +337,8 @@ impl<
             bayes_lambda: 0.0,
             bayes_log_lambda: 0.0,
             bayes_open: None,
+            recal: [[Knot::ZERO; N]; 4],
+            recal_len: [0; 4],
         }
     }
 
@@ -472,6 +500,12 @@ impl<
     /// The open head's parameters, when the table has that head.
     pub fn open_params(&self) -> Option<OpenParams> {
         self.bayes_open
+    }
+
+    /// The recalibration map of `head` (DESIGN §1.9), when the table holds one; the
+    /// scoring calls apply it.
+    pub fn recal_map(&self, head: Head) -> Option<RecalMap<'_>> {
+        self.view().recal_map(head)
     }
 
     /// ML scores of a batch: row `r` of `logits` and `objectness` (1.0 for every row when

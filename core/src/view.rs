@@ -12,6 +12,7 @@ use crate::layer;
 use crate::math::Backend;
 use crate::name::{check_class_name, ClassName, NAME_RULE_VERSION};
 use crate::open::{self, OpenParams};
+use crate::recal::{self, Knot, Maps, RecalMap, HEADS, MAX_KNOTS};
 use crate::wire::{self, BayesSlots, ClassFields, ClassSpec, Header, Settings};
 
 /// A validated table borrowed from its storage: `F` and `G` hold the ML and MAP
@@ -25,6 +26,8 @@ pub struct TableView<'a, F, G> {
     pub(crate) map: &'a [Histogram<G>],
     pub(crate) bayes: Option<BayesView<'a>>,
     pub(crate) settings: &'a Settings,
+    /// The heads' recalibration maps (DESIGN §1.9).
+    pub(crate) maps: Maps<'a>,
 }
 
 impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
@@ -56,6 +59,30 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     #[inline]
     pub fn bayes(&self) -> Option<BayesView<'a>> {
         self.bayes
+    }
+
+    /// The recalibration map of `head` (DESIGN §1.9), if the table holds one; every
+    /// scoring call of this view applies it.
+    #[inline]
+    pub fn recal_map(&self, head: Head) -> Option<RecalMap<'a>> {
+        self.maps.get(head)
+    }
+
+    /// The same table without its recalibration maps: the heads' own scores, which
+    /// `tune` fits maps to.
+    #[inline]
+    #[must_use]
+    pub fn without_maps(mut self) -> Self {
+        self.maps = Maps::NONE;
+        self
+    }
+
+    /// Applies `head`'s map, if any, to one detection's scores.
+    #[inline]
+    fn recalibrate(&self, head: Head, out: &mut [f32]) {
+        if let Some(g) = self.maps.get(head) {
+            g.apply(out);
+        }
     }
 
     /// Name of class `i`.
@@ -123,7 +150,9 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
             objectness,
             out,
             scratch,
-        )
+        )?;
+        self.recalibrate(Head::Ml, out);
+        Ok(())
     }
 
     /// MAP scores of one detection with backend `M` into `out` (K entries).
@@ -151,7 +180,9 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
             objectness,
             out,
             scratch,
-        )
+        )?;
+        self.recalibrate(Head::Map, out);
+        Ok(())
     }
 
     /// Bayes scores of one detection with backend `M` into `out` (K entries);
@@ -171,7 +202,9 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     ) -> Result<(), InferError> {
         let bayes = self.bayes.as_ref().ok_or(InferError::NoBayesHead)?;
         layer::check(logits, objectness, self.k(), out.len())?;
-        bayes.score_into::<M>(logits, objectness, out, scratch)
+        bayes.score_into::<M>(logits, objectness, out, scratch)?;
+        self.recalibrate(Head::Bayes, out);
+        Ok(())
     }
 
     /// The open head's parameters (DESIGN §1.8), when the table has that head.
@@ -198,7 +231,9 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
         let bayes = self.bayes.as_ref().ok_or(InferError::NoOpenHead)?;
         let params = bayes.open.as_ref().ok_or(InferError::NoOpenHead)?;
         layer::check(logits, objectness, self.k(), out.len())?;
-        open::score_into::<M>(bayes, params, logits, objectness, out, scratch)
+        open::score_into::<M>(bayes, params, logits, objectness, out, scratch)?;
+        self.recalibrate(Head::Open, out);
+        Ok(())
     }
 }
 
@@ -259,6 +294,9 @@ pub(crate) struct Slots<'t, 'a, F, G> {
     pub(crate) map: &'t mut [Histogram<G>],
     pub(crate) settings: &'t mut Settings,
     pub(crate) bayes: Option<BayesStorage<'t>>,
+    /// Room for each head's recalibration map (ML, MAP, Bayes, open): at most
+    /// [`MAX_KNOTS`] knots each, empty for a table type without maps.
+    pub(crate) recal: [&'t mut [Knot]; 4],
 }
 
 /// A Bayes head's storage, borrowed mutably.
@@ -321,17 +359,29 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> wire::B
             },
         }
     }
+
+    fn recal(&mut self, slot: usize) -> &mut [Knot] {
+        match self.recal.get_mut(slot) {
+            Some(k) => k,
+            None => &mut [],
+        }
+    }
 }
 
 impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'_, 'a, F, G> {
     /// Parses `body` (announced by `header`) into the storage and validates every
-    /// class and the Bayes head in place: nothing the size of a class is copied.
-    pub(crate) fn decode(mut self, header: &Header, body: &'a [u8]) -> Result<(), DecodeError> {
+    /// class, the Bayes head and the maps in place: nothing the size of a class is
+    /// copied. Returns the number of knots of each head's map (0: none).
+    pub(crate) fn decode(
+        mut self,
+        header: &Header,
+        body: &'a [u8],
+    ) -> Result<[usize; 4], DecodeError> {
         let has_bayes = header.bins_bayes > 0;
         if has_bayes != self.bayes.is_some() {
             return Err(DecodeError::Malformed);
         }
-        let parsed = wire::parse_body_into(body, has_bayes, header.open, &mut self)?;
+        let parsed = wire::parse_body_into(body, header.parts(), &mut self)?;
         let k = self.names.len();
         if parsed.classes != k || usize::from(header.k) != k {
             return Err(DecodeError::Malformed);
@@ -374,7 +424,33 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
                 None => None,
             };
         }
-        Ok(())
+        let has_open = has_bayes && parsed.open.is_some();
+        for ((&head, &n), knots) in HEADS.iter().zip(&parsed.maps).zip(&self.recal) {
+            if n == 0 {
+                continue;
+            }
+            let map_err = |error| TableError::Map { head, error };
+            if n > MAX_KNOTS {
+                return Err(map_err(crate::MapError::KnotCount).into());
+            }
+            if n > knots.len() {
+                return Err(DecodeError::MapCapacity {
+                    head,
+                    capacity: u16::try_from(knots.len()).unwrap_or(u16::MAX),
+                    found: u16::try_from(n).unwrap_or(u16::MAX),
+                });
+            }
+            let present = match head {
+                Head::Ml | Head::Map => true,
+                Head::Bayes => has_bayes,
+                Head::Open => has_open,
+            };
+            if !present {
+                return Err(map_err(crate::MapError::NoHead).into());
+            }
+            recal::check(knots.get(..n).unwrap_or_default()).map_err(map_err)?;
+        }
+        Ok(parsed.maps)
     }
 
     /// Validates class `i` as parsed (raw fields, frequencies in place), with the checks

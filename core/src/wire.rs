@@ -13,13 +13,18 @@
 //! Bayes    version 2 only: lambda (f32 LE), rows per category (varint C + C varint
 //!          u64), per logit its lo and hi (varint K + K pairs of f32 LE), the log-terms
 //!          (varint K*B*C + K*B*C f32 LE, logit-major: logit, then bin, then category)
-//! Open     version 3 only: temperature, epsilon (f32 LE each)
+//! Open     version 3: temperature, epsilon (f32 LE each); version 4, with a Bayes
+//!          head: an option (0, or 1 then temperature and epsilon)
+//! Maps     version 4 only: varint n >= 1, then n records (head code u8, strictly
+//!          increasing: 0 ML, 1 MAP, 2 Bayes, 3 open; varint knots + (x, y) f32 LE pairs)
 //! CRC      CRC-32/ISO-HDLC (zlib's crc32) of every byte before it, 4 bytes LE
 //! ```
 //!
-//! A table without a Bayes head is written as version 1, a table with one as version 2,
-//! a table with a Bayes head and the open head's parameters as version 3: each table has
-//! exactly one encoding.
+//! Version 4's header always holds the Bayes shape, `(0, 0)` without a Bayes head.
+//! A table with a recalibration map is written as version 4; without one, a table
+//! without a Bayes head is written as version 1, a table with one as version 2, a table
+//! with a Bayes head and the open head's parameters as version 3: each table has exactly
+//! one encoding.
 //!
 //! This module is shared by the layer, the host table and `build.rs`; it depends on
 //! nothing but `core`, serde and postcard, and never allocates: the class sequence type
@@ -31,26 +36,29 @@ use crate::error::{DecodeError, EncodeError, Head, TableError};
 use crate::gaussian::{Gaussian, GaussianError};
 use crate::histogram::{Axis, EdgeMode, Histogram, HistogramError, UpperTail};
 use crate::name::{ClassName, NameError, NAME_MAX};
+use crate::recal::{Knot, Maps};
 use crate::view::TableView;
 
 mod parse;
 
 #[cfg(test)]
 pub(crate) use parse::parse_body;
-pub(crate) use parse::{parse_body_into, BayesSlots, BodySink, ClassFields};
+pub(crate) use parse::{parse_body_into, BayesSlots, BodySink, ClassFields, Parts};
 
 /// The four bytes every table starts with.
 pub const MAGIC: [u8; 4] = *b"MLMP";
 
-/// The newest format version: this build writes it for tables with the open head
-/// (DESIGN §1.8), and reads it and every older version (a version-1 table has no Bayes
-/// head, a version-2 table no open head).
-pub const FORMAT_VERSION: u16 = 3;
+/// The newest format version: this build writes it for tables with a recalibration map
+/// (DESIGN §1.9), and reads it and every older version (a version-1 table has no Bayes
+/// head, a version-2 table no open head, a version-3 table no map).
+pub const FORMAT_VERSION: u16 = 4;
 
 /// The version of tables without a Bayes head.
 const VERSION_1: u16 = 1;
 /// The version of tables with a Bayes head and no open head.
 const VERSION_2: u16 = 2;
+/// The version of tables with the open head and no map.
+const VERSION_3: u16 = 3;
 
 /// Largest smoothing lambda a table may hold. Frequencies are at most 1 and priors at
 /// most about `4e18`, so with `lambda <= 1e6` no sum of K terms can overflow `f32`.
@@ -222,6 +230,8 @@ pub(crate) struct Header {
     pub(crate) categories: u16,
     /// Whether the open head's parameters follow the Bayes section (version 3).
     pub(crate) open: bool,
+    /// Whether the body ends with the open head's option and the maps (version 4).
+    pub(crate) maps: bool,
 }
 
 impl Header {
@@ -233,6 +243,15 @@ impl Header {
     /// `(Bayes bins, Bayes categories)`, `(0, 0)` without a Bayes head.
     pub(crate) fn bayes_shape(&self) -> (u16, u16) {
         (self.bins_bayes, self.categories)
+    }
+
+    /// The body's optional parts.
+    pub(crate) fn parts(&self) -> Parts {
+        Parts {
+            bayes: self.bins_bayes > 0,
+            open: self.open,
+            maps: self.maps,
+        }
     }
 }
 
@@ -356,13 +375,16 @@ pub(crate) fn open(bytes: &[u8]) -> Result<(Header, &[u8]), DecodeError> {
         bins_map,
         bins_bayes: 0,
         categories: 0,
-        open: version == FORMAT_VERSION,
+        open: version == VERSION_3,
+        maps: version == FORMAT_VERSION,
     };
     if version >= VERSION_2 {
         let ((bins, categories), rest) =
             postcard::take_from_bytes::<(u16, u16)>(body).map_err(malformed)?;
-        // Versions 2 and 3 are only ever written for a table with a Bayes head.
-        if bins == 0 || categories == 0 {
+        // Versions 2 and 3 are only ever written for a table with a Bayes head; version
+        // 4 stores (0, 0) for a table without one.
+        let none = bins == 0 && categories == 0;
+        if (bins == 0 || categories == 0) && !(none && version == FORMAT_VERSION) {
             return Err(DecodeError::Malformed);
         }
         (header.bins_bayes, header.categories, body) = (bins, categories, rest);
@@ -406,17 +428,23 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
         t.serialize_element(&MAGIC)?;
         let bayes = view.bayes();
         let open = bayes.and_then(|b| b.open());
-        t.serialize_element(&match (bayes.is_some(), open.is_some()) {
-            (false, _) => VERSION_1,
-            (true, false) => VERSION_2,
-            (true, true) => FORMAT_VERSION,
+        let maps = view.maps.any();
+        t.serialize_element(&match (maps, bayes.is_some(), open.is_some()) {
+            (true, _, _) => FORMAT_VERSION,
+            (false, false, _) => VERSION_1,
+            (false, true, false) => VERSION_2,
+            (false, true, true) => VERSION_3,
         })?;
         t.serialize_element(&narrow(k))?;
         t.serialize_element(&narrow(view.bins_ml()))?;
         t.serialize_element(&narrow(view.bins_map()))?;
-        if let Some(b) = &bayes {
-            t.serialize_element(&narrow(b.bins()))?;
-            t.serialize_element(&narrow(b.categories()))?;
+        match &bayes {
+            Some(b) => {
+                t.serialize_element(&narrow(b.bins()))?;
+                t.serialize_element(&narrow(b.categories()))?;
+            }
+            None if maps => t.serialize_element(&(0u16, 0u16))?,
+            None => {}
         }
         t.serialize_element(&SettingsWire::from_settings(view.settings()))?;
         t.serialize_element(&ClassSeq {
@@ -443,11 +471,49 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
             t.serialize_element(&AxesSeq(b.axes()))?;
             t.serialize_element(b.all_terms())?;
         }
-        if let Some(o) = &open {
+        if maps {
+            if bayes.is_some() {
+                t.serialize_element(&open.map(|o| (o.temperature(), o.epsilon())))?;
+            }
+            t.serialize_element(&MapsSeq(view.maps))?;
+        } else if let Some(o) = &open {
             t.serialize_element(&o.temperature())?;
             t.serialize_element(&o.epsilon())?;
         }
         t.end()
+    }
+}
+
+/// The maps on the wire: a sequence of `(head code, knots)` records, one per head that
+/// has a map, in slot order.
+struct MapsSeq<'a>(Maps<'a>);
+
+impl Serialize for MapsSeq<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let records = self.0 .0.iter().filter(|k| !k.is_empty()).count();
+        let mut seq = s.serialize_seq(Some(records))?;
+        for (slot, knots) in self.0 .0.iter().enumerate() {
+            if !knots.is_empty() {
+                let code = u8::try_from(slot).unwrap_or(u8::MAX);
+                seq.serialize_element(&(code, KnotsSeq(knots)))?;
+            }
+        }
+        seq.end()
+    }
+}
+
+/// One map's knots on the wire: a sequence of `(x, y)` pairs.
+struct KnotsSeq<'a>(&'a [Knot]);
+
+impl Serialize for KnotsSeq<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let mut seq = s.serialize_seq(Some(self.0.len()))?;
+        for k in self.0 {
+            seq.serialize_element(&(k.x, k.y))?;
+        }
+        seq.end()
     }
 }
 
@@ -537,17 +603,26 @@ const fn varint_len(n: usize) -> usize {
 /// Shortest possible table: magic, one-byte version and shape, settings, K = 0, CRC.
 const MIN_ENCODED_LEN: usize = MAGIC.len() + 4 + 10 + 1 + CRC_LEN;
 
-/// Upper bound of the encoded size of a table with `k` classes, the given bin counts and
+/// Upper bound of the encoded size of a table with `k` classes, the given bin counts,
 /// `categories` Bayes categories (0 and 0 without a Bayes head; with one, the open head's
-/// parameters are counted too); every name
-/// [`NAME_MAX`] bytes, every row count the largest `u64`.
+/// parameters are counted too) and maps of at most `knots` knots (0: none) for every
+/// head; every name [`NAME_MAX`] bytes, every row count the largest `u64`.
 pub(crate) const fn max_encoded_len(
     k: usize,
     bins_ml: usize,
     bins_map: usize,
     bins_bayes: usize,
     categories: usize,
+    knots: usize,
 ) -> usize {
+    let maps = if knots == 0 {
+        0
+    } else {
+        2 * varint_len(u16::MAX as usize) // the Bayes shape, (0, 0) without that head
+            + 1 // the open head's option
+            + 1 // the number of maps
+            + 4 * (1 + varint_len(knots) + 8 * knots)
+    };
     let bayes = if bins_bayes == 0 {
         0
     } else {
@@ -566,7 +641,7 @@ pub(crate) const fn max_encoded_len(
         + 4 * 2 // mean, variance
         + 4 * 2 + varint_len(bins_ml) + 4 * bins_ml
         + 4 * 2 + varint_len(bins_map) + 4 * bins_map;
-    header + settings + varint_len(k) + k * per_class + bayes + CRC_LEN
+    header + settings + varint_len(k) + k * per_class + bayes + maps + CRC_LEN
 }
 
 #[cfg(test)]

@@ -181,8 +181,9 @@ pub fn check_table<
     const B_MAP: usize,
     const B_BAYES: usize,
     const C: usize,
+    const N: usize,
 >(
-    table: &Table<K, B_ML, B_MAP, B_BAYES, C>,
+    table: &Table<K, B_ML, B_MAP, B_BAYES, C, N>,
 ) -> Result<(), Violation> {
     check_settings(table.settings())?;
     let missing = |found| Violation::ClassCount { expected: K, found };

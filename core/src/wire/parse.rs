@@ -10,6 +10,7 @@ use serde::Deserialize;
 use super::{Settings, SettingsWire};
 use crate::error::{DecodeError, Head};
 use crate::histogram::Axis;
+use crate::recal::Knot;
 
 #[cfg(test)]
 use super::BodyWire;
@@ -42,6 +43,9 @@ pub(crate) trait BodySink<'a> {
     /// Where the Bayes head's sequences go (row counts, axes, log-terms); a longer
     /// sequence is malformed. Only called for a table with a Bayes head.
     fn bayes(&mut self) -> BayesSlots<'_>;
+    /// Where the knots of the recalibration map in slot `slot` (ML, MAP, Bayes, open)
+    /// go; knots beyond its length are counted, not stored.
+    fn recal(&mut self, slot: usize) -> &mut [Knot];
 }
 
 /// The storage a Bayes head is parsed into (axes get their `lo` and `hi` only).
@@ -59,6 +63,20 @@ pub(crate) struct Parsed {
     pub(crate) classes: usize,
     pub(crate) bayes: Option<(f32, [usize; 3])>,
     pub(crate) open: Option<(f32, f32)>,
+    /// Knots of each head's recalibration map as stored (0: none), version 4.
+    pub(crate) maps: [usize; 4],
+}
+
+/// What the header announced about the body's optional parts.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Parts {
+    /// A Bayes section follows the classes.
+    pub(crate) bayes: bool,
+    /// The open head's parameters always follow the Bayes section (version 3).
+    pub(crate) open: bool,
+    /// Version 4: the open head's parameters as an option after the Bayes section (when
+    /// there is one), then the recalibration maps.
+    pub(crate) maps: bool,
 }
 
 /// The fields of one class besides its frequencies, as parsed (not validated).
@@ -76,15 +94,14 @@ pub(crate) struct ClassFields<'a> {
 }
 
 /// Parses the body into `sink` (the one body parser: every table, fixed-size or not,
-/// decodes through it); every byte must be used. `bayes` says whether the header
-/// announced a Bayes section, `open` whether the open head's parameters follow it
-/// (version 3; only with a Bayes section).
+/// decodes through it); every byte must be used. `parts` says which optional parts the
+/// header announced.
 pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     body: &'a [u8],
-    bayes: bool,
-    open: bool,
+    parts: Parts,
     sink: &mut S,
 ) -> Result<Parsed, DecodeError> {
+    let Parts { bayes, open, maps } = parts;
     let malformed = |_| DecodeError::Malformed;
     let mut de = postcard::Deserializer::from_bytes(body);
     // A struct is its fields in order: the settings, then the class sequence.
@@ -112,9 +129,20 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     };
     let open = if bayes.is_some() && open {
         Some(<(f32, f32)>::deserialize(&mut de).map_err(malformed)?)
+    } else if bayes.is_some() && maps {
+        Option::<(f32, f32)>::deserialize(&mut de).map_err(malformed)?
     } else {
         None
     };
+    let mut counts = [0usize; 4];
+    if maps {
+        MapsSeed {
+            sink: &mut *sink,
+            counts: &mut counts,
+        }
+        .deserialize(&mut de)
+        .map_err(malformed)?;
+    }
     let rest = de.finalize().map_err(malformed)?;
     if !rest.is_empty() {
         return Err(DecodeError::Malformed);
@@ -124,7 +152,125 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
         classes,
         bayes,
         open,
+        maps: counts,
     })
+}
+
+/// The recalibration maps of a version-4 body: a sequence of one or more records
+/// `(head code, knots)`, head codes strictly increasing (0 ML, 1 MAP, 2 Bayes, 3 open),
+/// each map's knots a sequence of `(x, y)` pairs.
+struct MapsSeed<'s, S> {
+    sink: &'s mut S,
+    counts: &'s mut [usize; 4],
+}
+
+impl<'de, S: BodySink<'de>> DeserializeSeed<'de> for MapsSeed<'_, S> {
+    type Value = ();
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de, S: BodySink<'de>> Visitor<'de> for MapsSeed<'_, S> {
+    type Value = ();
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence of recalibration maps")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+        let mut next_slot = 0usize;
+        let mut records = 0usize;
+        loop {
+            let seed = MapSeed {
+                sink: &mut *self.sink,
+                counts: &mut *self.counts,
+                min_slot: next_slot,
+            };
+            match seq.next_element_seed(seed)? {
+                Some(slot) => {
+                    next_slot = slot + 1;
+                    records += 1;
+                }
+                None => break,
+            }
+        }
+        if records == 0 {
+            return Err(A::Error::invalid_length(0, &"at least one map"));
+        }
+        Ok(())
+    }
+}
+
+/// One map record: its head code (at least `min_slot`), then its knots.
+struct MapSeed<'s, S> {
+    sink: &'s mut S,
+    counts: &'s mut [usize; 4],
+    min_slot: usize,
+}
+
+impl<'de, S: BodySink<'de>> DeserializeSeed<'de> for MapSeed<'_, S> {
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_tuple(2, self)
+    }
+}
+
+impl<'de, S: BodySink<'de>> Visitor<'de> for MapSeed<'_, S> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a recalibration map")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let code: u8 = seq
+            .next_element()?
+            .ok_or_else(|| A::Error::invalid_length(0, &"a map"))?;
+        let slot = usize::from(code);
+        if slot < self.min_slot || slot >= self.counts.len() {
+            return Err(A::Error::custom("map head codes not increasing"));
+        }
+        let n = seq
+            .next_element_seed(CountInto(self.sink.recal(slot)))?
+            .ok_or_else(|| A::Error::invalid_length(1, &"a map"))?;
+        if let Some(c) = self.counts.get_mut(slot) {
+            *c = n;
+        }
+        Ok(slot)
+    }
+}
+
+/// A sequence of knots stored into a slice while it has room and counted to its end.
+struct CountInto<'s>(&'s mut [Knot]);
+
+impl<'de> DeserializeSeed<'de> for CountInto<'_> {
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for CountInto<'_> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence of knots")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let mut n = 0usize;
+        while let Some((x, y)) = seq.next_element::<(f32, f32)>()? {
+            if let Some(slot) = self.0.get_mut(n) {
+                *slot = Knot { x, y };
+            }
+            n = n.saturating_add(1);
+        }
+        Ok(n)
+    }
 }
 
 /// A sequence of `V`, stored through `set` into the slots of a slice; its value is the

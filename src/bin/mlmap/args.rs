@@ -273,6 +273,10 @@ pub struct TuneArgs {
     /// How many of the best candidates to print per head.
     #[arg(long, default_value_t = 5, value_name = "N")]
     pub top: usize,
+    /// Fit no recalibration map (DESIGN §1.9): by default each head gets one where it
+    /// lowers the validation ECE out of sample within the guards.
+    #[arg(long)]
+    pub no_maps: bool,
     /// Output format of the candidates (`json` prints them at full precision).
     #[arg(long, value_enum, default_value_t = TuneFormat::Text)]
     pub format: TuneFormat,

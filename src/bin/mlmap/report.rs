@@ -9,6 +9,7 @@ use mlmap::host::eval::{Evaluation, Method};
 use mlmap::host::names::Named;
 use mlmap::host::tune::{Candidate, Comparison, Objective, TuneParams, TuneResult, Tuned};
 use mlmap::host::DynTable;
+use mlmap::Head;
 
 use crate::args::Format;
 
@@ -498,11 +499,59 @@ pub fn tune_json(
             "best": c.best.map(|m| m.name()),
         }),
     );
+    if params.maps {
+        let maps: serde_json::Map<String, serde_json::Value> = tuned
+            .maps
+            .iter()
+            .map(|m| {
+                let finite = |x: f64| x.is_finite().then(|| serde_json::json!(x));
+                let knots: Vec<[f32; 2]> = m.knots.iter().map(|k| [k.x, k.y]).collect();
+                (
+                    m.head.name().to_string(),
+                    serde_json::json!({
+                        "kept": m.kept,
+                        "cv_ece_without": finite(m.ece_without),
+                        "cv_ece_with": finite(m.ece_with),
+                        "within_guards": m.excess == 0.0,
+                        "knots": knots,
+                    }),
+                )
+            })
+            .collect();
+        v.insert("maps".into(), maps.into());
+    }
     v.insert(
         "table".into(),
         serde_json::json!({ "path": table_path.display().to_string(), "bytes": table_bytes }),
     );
     pretty(&serde_json::Value::Object(v))
+}
+
+/// What `tune` decided for each head's recalibration map (DESIGN §1.9).
+pub fn maps_text(maps: &[mlmap::host::tune::MapChoice]) -> String {
+    let mut s = String::from(
+        "recalibration maps (ECE of two-fold cross-fitting on the validation rows):\n",
+    );
+    if maps.is_empty() {
+        s.push_str("  none could be fitted\n");
+    }
+    for m in maps {
+        let verdict = if m.kept {
+            format!("kept, {} knots", m.knots.len())
+        } else if m.excess > 0.0 {
+            "not kept: outside the guards".to_string()
+        } else {
+            "not kept: no lower ECE".to_string()
+        };
+        let _ = writeln!(
+            s,
+            "  {:<6} ECE {:.4} -> {:.4}  {verdict}",
+            m.head.name(),
+            m.ece_without,
+            m.ece_with
+        );
+    }
+    s
 }
 
 /// A few lines describing a written table.
@@ -551,6 +600,17 @@ pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
         None => {
             let _ = writeln!(s, "  open  none");
         }
+    }
+    let maps: Vec<String> = [Head::Ml, Head::Map, Head::Bayes, Head::Open]
+        .into_iter()
+        .filter_map(|h| {
+            table
+                .recal_map(h)
+                .map(|m| format!("{} ({} knots)", h.name(), m.knots().len()))
+        })
+        .collect();
+    if !maps.is_empty() {
+        let _ = writeln!(s, "  recalibration maps: {}", maps.join(", "));
     }
     let rows: Vec<String> = table
         .class_names()

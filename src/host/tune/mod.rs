@@ -24,6 +24,7 @@
 mod bayes;
 mod open;
 mod pipeline;
+mod recal;
 
 use std::prelude::rust_2021::*;
 use std::{format, vec};
@@ -31,6 +32,7 @@ use std::{format, vec};
 pub use self::bayes::{search_bayes, BayesSearchParams};
 pub use self::open::{epsilon_grid, search_open, OpenSearchParams};
 pub use self::pipeline::{tune, BayesGrid, Compared, Comparison, TuneParams, Tuned};
+pub use self::recal::{choose_maps, fit_map, MapChoice, MAP_GROUPS};
 use crate::host::metrics::{Accumulator, Metrics, MetricsConfig, Parts};
 use crate::host::names::{Name, Named};
 use crate::{scores_from_evidence, Gaussian, Head, Histogram, Libm, UpperTail};

@@ -6,8 +6,8 @@ use std::path::Path;
 use std::prelude::rust_2021::*;
 
 use super::{
-    search, search_bayes, search_open, BayesSearchParams, Candidate, Guards, Judge, Objective,
-    OpenSearchParams, Reference, SearchParams, TuneError, TuneResult, ValRows,
+    search, search_bayes, search_open, BayesSearchParams, Candidate, Guards, Judge, MapChoice,
+    Objective, OpenSearchParams, Reference, SearchParams, TuneError, TuneResult, ValRows,
 };
 use crate::host::baselines::{self, Baseline, Rows};
 use crate::host::data::{check_classes, Loaded};
@@ -42,6 +42,7 @@ pub struct BayesGrid {
 /// | `guards` | how much accuracy and mAP a chosen candidate may lose against softmax |
 /// | `edges`, `tail` | the fit's edge placement and tail policy |
 /// | `detail` | how many of the best candidates per head get every metric |
+/// | `maps` | whether to fit a recalibration map per head (DESIGN §1.9), kept where it lowers the ECE |
 #[derive(Debug, Clone, PartialEq)]
 pub struct TuneParams {
     /// Bin counts to try, per head (ML and MAP).
@@ -62,6 +63,8 @@ pub struct TuneParams {
     pub tail: UpperTail,
     /// How many of the best candidates per head get every metric.
     pub detail: usize,
+    /// Whether to fit recalibration maps (DESIGN §1.9).
+    pub maps: bool,
 }
 
 impl TuneParams {
@@ -158,6 +161,9 @@ pub struct Tuned {
     pub table: DynTable,
     /// The heads and the baselines on the validation rows.
     pub comparison: Comparison,
+    /// The recalibration map fitted for each head, and whether the table keeps it
+    /// (empty when maps were not asked for).
+    pub maps: Vec<MapChoice>,
 }
 
 /// The rows candidates are scored on: the validation rows, then the never-seen ones
@@ -371,6 +377,11 @@ pub fn tune(
                 .map_err(|e| HostError::fit(train.path(), FitError::Table(e)))?;
         }
     }
+    let (table, maps) = if params.maps {
+        super::choose_maps(table, &val_rows, &judge)
+    } else {
+        (table, Vec::new())
+    };
     let comparison = compare(
         &table, &result, &rows, val, val_path, ood, softmax, softmax_m, judge,
     )?;
@@ -378,6 +389,7 @@ pub fn tune(
         result,
         table,
         comparison,
+        maps,
     })
 }
 

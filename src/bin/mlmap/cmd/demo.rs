@@ -27,8 +27,9 @@ use crate::output;
 use crate::report::{self, table_summary};
 use crate::shared::{write_plots, write_table};
 
-/// The shape the demo's firmware is built for.
-type Firmware = Table<3, 22, 17, 22, 4>;
+/// The shape the demo's firmware is built for, with room for a recalibration map per
+/// head.
+type Firmware = Table<3, 22, 17, 22, 4, { mlmap::MAX_KNOTS }>;
 
 /// Scores every row with the decoded fixed-size table and with the host table;
 /// returns (rows compared, rows whose scores differ in any bit).
@@ -43,25 +44,28 @@ fn device_check(
     let ml_host = head_scores(host, Head::Ml, data, path)?;
     let map_host = head_scores(host, Head::Map, data, path)?;
     let bayes_host = head_scores(host, Head::Bayes, data, path)?;
+    let open_host = head_scores(host, Head::Open, data, path)?;
     let mut differ = 0;
     let rows = data.logits.chunks_exact(3).zip(&data.objectness);
     let host_rows = ml_host
         .chunks_exact(3)
         .zip(map_host.chunks_exact(3))
-        .zip(bayes_host.chunks_exact(3));
-    for ((x, &os), ((ml_h, map_h), bayes_h)) in rows.zip(host_rows) {
+        .zip(bayes_host.chunks_exact(3))
+        .zip(open_host.chunks_exact(3));
+    for ((x, &os), (((ml_h, map_h), bayes_h), open_h)) in rows.zip(host_rows) {
         let mut xs = [0f32; 3];
         for (d, &v) in xs.iter_mut().zip(x) {
             *d = v as f32;
         }
         let x = xs;
-        let (ml, map, bayes) = match (
+        let (ml, map, bayes, open) = match (
             device.ml(&x, os as f32),
             device.map(&x, os as f32),
             device.bayes(&x, os as f32),
+            device.open(&x, os as f32),
         ) {
-            (Ok(a), Ok(b), Ok(c)) => (a, b, c),
-            (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
+            (Ok(a), Ok(b), Ok(c), Ok(d)) => (a, b, c, d),
+            (Err(e), _, _, _) | (_, Err(e), _, _) | (_, _, Err(e), _) | (_, _, _, Err(e)) => {
                 return Err(CliError::input(path, e))
             }
         };
@@ -70,7 +74,11 @@ fn device_check(
                 .zip(h)
                 .all(|(a, &b)| a.to_bits() == (b as f32).to_bits())
         };
-        if !same(&ml.0, ml_h) || !same(&map.0, map_h) || !same(&bayes.0, bayes_h) {
+        if !same(&ml.0, ml_h)
+            || !same(&map.0, map_h)
+            || !same(&bayes.0, bayes_h)
+            || !same(&open.0, open_h)
+        {
             differ += 1;
         }
     }
@@ -125,17 +133,21 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         edges: EdgeMode::Linspace,
         tail: UpperTail::Zero,
         detail: 5,
+        maps: true,
     };
     let tune::Tuned {
         result,
         table: tuned,
         comparison,
+        maps,
     } = tune::tune(&train, &val, &val_p, None, &params, |_, _| {})?;
     let tuned_path = a.output.join("tuned.mlmap");
     let size = write_table(&tuned_path, &tuned)?;
     let mut tune_text = report::candidates(&result, params.objective, 5, |h| params.candidates(h));
     tune_text.push('\n');
     tune_text.push_str(&report::comparison(&comparison, params.objective));
+    tune_text.push('\n');
+    tune_text.push_str(&report::maps_text(&maps));
     output::write_bytes_atomic(&a.output.join("tune.txt"), tune_text.as_bytes())?;
     let _ = writeln!(
         log,
@@ -179,7 +191,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
     let (n, differ) = device_check(&bytes, &tuned, &test, &test_p)?;
     let _ = writeln!(
         log,
-        "\n4. no_std layer: Table<3, 22, 17, 22, 4>::from_bytes({}) scored {n} test rows: {} with scores differing from the host's in any bit",
+        "\n4. no_std layer: Table<3, 22, 17, 22, 4, 32>::from_bytes({}) scored {n} test rows: {} with scores differing from the host's in any bit",
         tuned_path.display(),
         differ
     );

@@ -12,7 +12,7 @@ use mlmap::Head;
 use crate::args::{TuneArgs, TuneFormat};
 use crate::error::{fit_error, CliError, Result};
 use crate::output;
-use crate::report::{candidates, comparison, table_summary, tune_json};
+use crate::report::{candidates, comparison, maps_text, table_summary, tune_json};
 use crate::shared::write_table;
 
 /// The grid of the Bayes head from the flags.
@@ -53,6 +53,7 @@ pub fn run(a: &TuneArgs) -> Result<()> {
         edges: a.edges,
         tail: a.upper_tail,
         detail: a.top,
+        maps: !a.no_maps,
     };
     params.check_size().map_err(CliError::Input)?;
     let mut inputs = vec![a.train.as_path(), a.val.as_path()];
@@ -89,6 +90,10 @@ pub fn run(a: &TuneArgs) -> Result<()> {
             text.push('\n');
             text.push_str(&comparison(&tuned.comparison, params.objective));
             text.push('\n');
+            if params.maps {
+                text.push_str(&maps_text(&tuned.maps));
+                text.push('\n');
+            }
             text.push_str(&table_summary(&a.output, &tuned.table, size));
             text
         }

@@ -1,0 +1,272 @@
+//! Recalibration maps (docs/DESIGN.md §1.9): a monotone, piecewise-linear `g` on
+//! `[0, 1]`, stored per head, applied to a detection's scores after the head.
+//!
+//! ```text
+//! knots (x_0, y_0) .. (x_{n-1}, y_{n-1}),  2 <= n <= MAX_KNOTS,
+//!       x_0 = 0, x_{n-1} = 1, x strictly increasing, 0 <= y_0 <= .. <= y_{n-1} <= 1
+//! g(t)  = min(y_i + (y_{i+1} - y_i) * min((t - x_i) / (x_{i+1} - x_i), 1), y_{i+1})
+//!         on the segment [x_i, x_{i+1}] that holds t
+//! s_c  <- (s_c / top) * g(top)    with top = max_c s_c; scores stay 0 when top = 0
+//! ```
+//!
+//! `s_c / top` is in `[0, 1]` and exactly 1 for the top score, so the top score becomes
+//! `g(top)` exactly, every other score at most that, and the order of the classes within
+//! a detection is kept (division and multiplication by a positive number never reverse
+//! two floats). Each rounding step is monotone and the `min` with `y_{i+1}` keeps a
+//! segment's end from passing the next segment's start, so `g` never decreases in `f32`
+//! either.
+
+use crate::error::{Head, MapError};
+
+/// Most knots a map may have.
+pub const MAX_KNOTS: usize = 32;
+
+/// One knot of a recalibration map: the map sends the top score `x` to `y`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Knot {
+    /// A top score, in `[0, 1]`.
+    pub x: f32,
+    /// What it becomes, in `[0, 1]`.
+    pub y: f32,
+}
+
+impl Knot {
+    /// The knot at the origin, for storage filled before use.
+    pub(crate) const ZERO: Self = Self { x: 0.0, y: 0.0 };
+}
+
+/// A validated recalibration map, borrowed from its table (DESIGN §1.9).
+///
+/// # Examples
+///
+/// ```
+/// # use mlmap_core as mlmap;
+/// use mlmap::{Knot, RecalMap};
+///
+/// let knots = [Knot { x: 0.0, y: 0.0 }, Knot { x: 0.5, y: 0.2 }, Knot { x: 1.0, y: 0.9 }];
+/// let g = RecalMap::new(&knots)?;
+/// assert_eq!(g.eval(0.5), 0.2);
+/// let mut scores = [0.5, 0.25, 0.0];
+/// g.apply(&mut scores);
+/// assert_eq!(scores, [0.2, 0.1, 0.0]);
+/// # Ok::<(), mlmap::MapError>(())
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RecalMap<'a> {
+    knots: &'a [Knot],
+}
+
+impl<'a> RecalMap<'a> {
+    /// Checks the knots against DESIGN §1.9: 2 to [`MAX_KNOTS`] of them, the first at
+    /// `x = 0` and the last at `x = 1`, `x` strictly increasing, every `y` in `[0, 1]`
+    /// and non-decreasing.
+    ///
+    /// # Errors
+    ///
+    /// The first rule broken, as a [`MapError`].
+    pub fn new(knots: &'a [Knot]) -> Result<Self, MapError> {
+        check(knots)?;
+        Ok(Self { knots })
+    }
+
+    /// A map from knots already checked (a validated table's storage).
+    #[inline]
+    pub(crate) const fn trusted(knots: &'a [Knot]) -> Self {
+        Self { knots }
+    }
+
+    /// The knots.
+    #[inline]
+    pub fn knots(&self) -> &'a [Knot] {
+        self.knots
+    }
+
+    /// `g(t)` for a top score `t` in `[0, 1]` (`t` below 0 is taken as 0, above 1 as 1).
+    #[inline]
+    pub fn eval(&self, t: f32) -> f32 {
+        let k = self.knots;
+        // The last knot at or below t starts the segment; the last segment holds t = 1.
+        let i = k
+            .partition_point(|p| p.x <= t)
+            .saturating_sub(1)
+            .min(k.len().saturating_sub(2));
+        match (k.get(i), k.get(i + 1)) {
+            (Some(a), Some(b)) => {
+                let f = ((t - a.x) / (b.x - a.x)).clamp(0.0, 1.0);
+                (a.y + (b.y - a.y) * f).min(b.y)
+            }
+            _ => t,
+        }
+    }
+
+    /// Rescales one detection's scores in place: each score `s` becomes
+    /// `(s / top) * g(top)`, `top` the largest; all-zero scores stay zero.
+    #[inline]
+    pub fn apply(&self, scores: &mut [f32]) {
+        let top = scores
+            .iter()
+            .fold(0.0f32, |m, &s| if s > m { s } else { m });
+        if !(top > 0.0) {
+            return;
+        }
+        let g = self.eval(top);
+        for s in scores.iter_mut() {
+            *s = (*s / top) * g;
+        }
+    }
+}
+
+/// The knots' rule (see [`RecalMap::new`]).
+pub(crate) fn check(knots: &[Knot]) -> Result<(), MapError> {
+    if !(2..=MAX_KNOTS).contains(&knots.len()) {
+        return Err(MapError::KnotCount);
+    }
+    let (Some(first), Some(last)) = (knots.first(), knots.last()) else {
+        return Err(MapError::KnotCount);
+    };
+    // `== 0.0` also holds for -0.0, which is not the stored origin: refuse it so that the
+    // table has one encoding.
+    if first.x != 0.0 || first.x.is_sign_negative() || last.x != 1.0 {
+        return Err(MapError::Ends);
+    }
+    let mut prev: Option<&Knot> = None;
+    for k in knots {
+        if !(0.0..=1.0).contains(&k.y) || k.y.is_sign_negative() {
+            return Err(MapError::Values);
+        }
+        if let Some(p) = prev {
+            if !(k.x > p.x) {
+                return Err(MapError::Order);
+            }
+            if !(k.y >= p.y) {
+                return Err(MapError::Values);
+            }
+        }
+        prev = Some(k);
+    }
+    Ok(())
+}
+
+/// The maps of a table, one slot per head in the order ML, MAP, Bayes, open; an empty
+/// slice is no map.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Maps<'a>(pub(crate) [&'a [Knot]; 4]);
+
+impl<'a> Maps<'a> {
+    /// No map for any head.
+    pub(crate) const NONE: Self = Self([&[]; 4]);
+
+    /// The map of `head`, if the table has one.
+    #[inline]
+    pub(crate) fn get(&self, head: Head) -> Option<RecalMap<'a>> {
+        self.0
+            .get(head_slot(head))
+            .filter(|k| !k.is_empty())
+            .map(|k| RecalMap::trusted(k))
+    }
+
+    /// Whether any head has a map.
+    pub(crate) fn any(&self) -> bool {
+        self.0.iter().any(|k| !k.is_empty())
+    }
+}
+
+/// The heads in slot order (and in the order of the format's map records).
+pub(crate) const HEADS: [Head; 4] = [Head::Ml, Head::Map, Head::Bayes, Head::Open];
+
+/// The slot of `head` in a table's maps, and its code in the format.
+#[inline]
+pub(crate) const fn head_slot(head: Head) -> usize {
+    match head {
+        Head::Ml => 0,
+        Head::Map => 1,
+        Head::Bayes => 2,
+        Head::Open => 3,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn k(x: f32, y: f32) -> Knot {
+        Knot { x, y }
+    }
+
+    #[test]
+    fn rule() {
+        let ok = [k(0.0, 0.1), k(0.4, 0.1), k(1.0, 0.95)];
+        assert!(RecalMap::new(&ok).is_ok());
+        assert_eq!(RecalMap::new(&ok[..1]), Err(MapError::KnotCount));
+        assert_eq!(RecalMap::new(&[k(0.0, 0.0); 33]), Err(MapError::KnotCount));
+        assert_eq!(
+            RecalMap::new(&[k(0.1, 0.0), k(1.0, 1.0)]),
+            Err(MapError::Ends)
+        );
+        assert_eq!(
+            RecalMap::new(&[k(-0.0, 0.0), k(1.0, 1.0)]),
+            Err(MapError::Ends)
+        );
+        assert_eq!(
+            RecalMap::new(&[k(0.0, 0.0), k(0.9, 1.0)]),
+            Err(MapError::Ends)
+        );
+        assert_eq!(
+            RecalMap::new(&[k(0.0, 0.0), k(0.5, 0.3), k(0.5, 0.4), k(1.0, 1.0)]),
+            Err(MapError::Order)
+        );
+        assert_eq!(
+            RecalMap::new(&[k(0.0, 0.5), k(0.5, 0.4), k(1.0, 1.0)]),
+            Err(MapError::Values)
+        );
+        assert_eq!(
+            RecalMap::new(&[k(0.0, 0.0), k(1.0, 1.5)]),
+            Err(MapError::Values)
+        );
+        assert_eq!(
+            RecalMap::new(&[k(0.0, f32::NAN), k(1.0, 1.0)]),
+            Err(MapError::Values)
+        );
+        assert_eq!(
+            RecalMap::new(&[k(0.0, 0.0), k(f32::NAN, 0.5), k(1.0, 1.0)]),
+            Err(MapError::Order)
+        );
+    }
+
+    /// Values worked by hand.
+    #[test]
+    fn eval_by_hand() {
+        let knots = [k(0.0, 0.0), k(0.5, 0.25), k(0.75, 0.25), k(1.0, 1.0)];
+        let g = RecalMap::new(&knots).unwrap();
+        assert_eq!(g.eval(0.0), 0.0);
+        assert_eq!(g.eval(0.25), 0.125);
+        assert_eq!(g.eval(0.5), 0.25);
+        assert_eq!(g.eval(0.6), 0.25);
+        assert_eq!(g.eval(0.875), 0.625);
+        assert_eq!(g.eval(1.0), 1.0);
+        assert_eq!(g.eval(2.0), 1.0);
+        assert_eq!(g.eval(-1.0), 0.0);
+        let mut s = [0.5, 0.25, 0.125];
+        g.apply(&mut s);
+        assert_eq!(s, [0.25, 0.125, 0.0625]);
+        let mut zero = [0.0; 3];
+        g.apply(&mut zero);
+        assert_eq!(zero, [0.0; 3]);
+    }
+
+    /// `g` never decreases, in `f32`, across a segment boundary where the interpolation
+    /// would round past the next knot.
+    #[test]
+    fn monotone_at_knots() {
+        let knots = [k(0.0, 0.1), k(0.3, 0.7), k(0.7, 0.7000001), k(1.0, 1.0)];
+        let g = RecalMap::new(&knots).unwrap();
+        let mut prev = g.eval(0.0);
+        let mut t = 0.0f32;
+        while t <= 1.0 {
+            let v = g.eval(t);
+            assert!(v >= prev, "g({t}) = {v} < {prev}");
+            prev = v;
+            t = f32::from_bits(t.to_bits() + 997);
+        }
+    }
+}
