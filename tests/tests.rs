@@ -18,6 +18,11 @@ mod invariants;
 /// The quantized table: bit-for-bit agreement with the f32 heads, size, malformed sections.
 mod quantized;
 
+/// Recalibration maps (DESIGN §1.9): every head after its map against the numpy
+/// reference, the version-4 bytes, capacity and rule errors, the map's properties.
+#[cfg(feature = "std")]
+mod maps;
+
 /// Reading CSV files and NPY directories: valid inputs and every malformed case (DESIGN §2).
 #[cfg(feature = "std")]
 mod host_data;

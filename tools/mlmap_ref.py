@@ -41,6 +41,12 @@ MAGIC = b"MLMP"
 VERSION_1 = 1
 VERSION_2 = 2
 VERSION_3 = 3
+# Version 4: any of the above plus recalibration maps (DESIGN.md section 1.9); its header
+# always holds the Bayes shape ((0, 0) without a Bayes head), the open head's parameters
+# are an option after the Bayes section, and the maps follow.
+VERSION_4 = 4
+# Head codes of the maps, in their order in the file.
+MAP_HEADS = ("ml", "map", "bayes", "open")
 VARIANCE_FLOOR = 1e-12
 # The open head's (temperature, epsilon) of a table no validation data has tuned.
 UNTUNED_OPEN = (1.0, 0.0)
@@ -62,24 +68,30 @@ def f32(v):
     return struct.pack("<f", float(np.float32(v)))
 
 
-def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None, open_=None):
+def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None, open_=None,
+           maps=None):
     """The bytes of a table file (docs/FORMAT.md).
 
     classes: list of dicts name, rows, mean, var, ml_lo, ml_hi, ml_freqs, map_lo, map_hi,
     map_freqs. bayes: None (a version-1 file) or a dict lambda, rows (per category),
     ranges (K (lo, hi) pairs) and terms (C*K*B log-terms, held category-major here, written
     logit-major): a version-2 file. open_: None, or with a Bayes head a pair
-    (temperature, epsilon): a version-3 file.
+    (temperature, epsilon): a version-3 file. maps: None, or a dict head name ("ml", "map",
+    "bayes", "open") -> list of (x, y) knots: a version-4 file.
     """
     k = len(classes)
     bml = len(classes[0]["ml_freqs"])
     bmap = len(classes[0]["map_freqs"])
     b = bytearray(MAGIC)
     version = VERSION_1 if bayes is None else (VERSION_2 if open_ is None else VERSION_3)
+    if maps:
+        version = VERSION_4
     header = [version, k, bml, bmap]
     if bayes is not None:
         cats = len(bayes["rows"])
         header += [len(bayes["terms"]) // (cats * k), cats]
+    elif maps:
+        header += [0, 0]
     for v in header:
         b += varint(v)
     b += bytes([edge_mode, upper_tail]) + f32(lambda_ml) + f32(lambda_map)
@@ -101,8 +113,16 @@ def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None
         cats, k = len(bayes["rows"]), len(bayes["ranges"])
         lm = np.asarray(bayes["terms"], dtype=np.float32).reshape(cats, k, -1).transpose(1, 2, 0)
         b += varint(lm.size) + b"".join(f32(v) for v in lm.ravel())
-        if open_ is not None:
+        if maps:
+            b += b"\x00" if open_ is None else b"\x01" + f32(open_[0]) + f32(open_[1])
+        elif open_ is not None:
             b += f32(open_[0]) + f32(open_[1])
+    if maps:
+        heads = [h for h in MAP_HEADS if h in maps]
+        b += varint(len(heads))
+        for h in heads:
+            b += bytes([MAP_HEADS.index(h)]) + varint(len(maps[h]))
+            b += b"".join(f32(x) + f32(y) for x, y in maps[h])
     b += struct.pack("<I", zlib.crc32(bytes(b)) & 0xFFFFFFFF)
     return bytes(b)
 
@@ -230,15 +250,21 @@ def decode(data):
     r = Reader(data[:-4])
     r.take(4)
     version, k, bml, bmap = (r.varint() for _ in range(4))
-    if version not in (VERSION_1, VERSION_2, VERSION_3):
+    if version not in (VERSION_1, VERSION_2, VERSION_3, VERSION_4):
         raise ValueError("version")
+    has_bayes = version in (VERSION_2, VERSION_3)
     if version >= VERSION_2:
         bins_bayes, cats = r.varint(), r.varint()
-        if bins_bayes == 0 or cats == 0:
-            raise ValueError("a version-2 header announces an empty Bayes head")
+        if version == VERSION_4 and bins_bayes == 0 and cats == 0:
+            has_bayes = False
+        elif bins_bayes == 0 or cats == 0:
+            raise ValueError("a header announces an empty Bayes head")
+        else:
+            has_bayes = True
     edge_mode, upper_tail = r.take(1)[0], r.take(1)[0]
     t = dict(k=k, bins_ml=bml, bins_map=bmap, edge_mode=edge_mode, upper_tail=upper_tail,
-             lambda_ml=r.f32(), lambda_map=r.f32(), classes=[], bayes=None, open=None)
+             lambda_ml=r.f32(), lambda_map=r.f32(), classes=[], bayes=None, open=None,
+             maps={})
     if r.varint() != k:
         raise ValueError("class count")
     for _ in range(k):
@@ -246,7 +272,7 @@ def decode(data):
         c["ml_lo"], c["ml_hi"], c["ml_freqs"] = r.f32(), r.f32(), r.f32s()
         c["map_lo"], c["map_hi"], c["map_freqs"] = r.f32(), r.f32(), r.f32s()
         t["classes"].append(c)
-    if version >= VERSION_2:
+    if has_bayes:
         lam = r.f32()
         rows = [r.varint() for _ in range(r.varint())]
         ranges = [(r.f32(), r.f32()) for _ in range(r.varint())]
@@ -260,6 +286,23 @@ def decode(data):
                           **{"lambda": lam})
     if version == VERSION_3:
         t["open"] = (r.f32(), r.f32())
+    if version == VERSION_4:
+        if has_bayes:
+            flag = r.take(1)[0]
+            if flag not in (0, 1):
+                raise ValueError("open option")
+            if flag == 1:
+                t["open"] = (r.f32(), r.f32())
+        n = r.varint()
+        if n == 0:
+            raise ValueError("a version-4 table without maps")
+        last = -1
+        for _ in range(n):
+            code = r.take(1)[0]
+            if code <= last or code >= len(MAP_HEADS):
+                raise ValueError("map head codes")
+            last = code
+            t["maps"][MAP_HEADS[code]] = [(r.f32(), r.f32()) for _ in range(r.varint())]
     if r.pos != len(r.data):
         raise ValueError("trailing bytes")
     return t
@@ -396,6 +439,35 @@ def bayes(t, x, os_):
     return os_ * bayes_posterior(t, x)[:t["k"]]
 
 
+def recal_g(knots, top):
+    """The map g of DESIGN.md section 1.9 at top, in float64: linear between the knots
+    around it (the last knot at or below top starts the segment)."""
+    xs = np.array([k[0] for k in knots])
+    ys = np.array([k[1] for k in knots])
+    i = min(max(int(np.searchsorted(xs, top, side="right")) - 1, 0), len(xs) - 2)
+    f = min(max((top - xs[i]) / (xs[i + 1] - xs[i]), 0.0), 1.0)
+    return ys[i] + (ys[i + 1] - ys[i]) * f
+
+
+def recal(knots, scores):
+    """A detection's scores after the map: each times g(top) / top (zeros stay zero; the
+    device also keeps every score below the top strictly below g(top), a clamp that in
+    float64 never binds)."""
+    scores = np.asarray(scores, dtype=np.float64)
+    top = scores.max()
+    if not top > 0:
+        return scores
+    return scores / top * recal_g(knots, top)
+
+
+def head_scores(t, head, x, os_):
+    """A head's scores, after its map when the table holds one."""
+    s = {"ml": ml, "map": map_, "bayes": bayes, "open": open_}[head](t, x, os_)
+    if head in t["maps"]:
+        s = recal(t["maps"][head], s)
+    return s
+
+
 # ---------------------------------------------------------------------------------------
 # Golden files for tests/layer.rs and tests/format.rs.
 
@@ -530,6 +602,21 @@ BAYES_CASES = [
     ("bayes objectness above 1", [3.0, 0.5, -3.5], 1.5),
 ]
 
+# Recalibration maps for the small tables (DESIGN.md section 1.9): round knots, one map
+# per head; and a table without a Bayes head with maps for ML and MAP only.
+SMALL_MAPS = {
+    "ml": [(0.0, 0.0625), (0.25, 0.125), (0.5, 0.5), (1.0, 0.75)],
+    "map": [(0.0, 0.1), (0.5, 0.1), (0.75, 0.6), (1.0, 1.0)],
+    "bayes": [(0.0, 0.05), (0.125, 0.25), (0.375, 0.25), (0.625, 0.5), (0.875, 0.875),
+              (1.0, 0.9375)],
+    "open": [(0.0, 0.03125), (0.5, 0.25), (1.0, 1.0)],
+}
+SMALL_MAPS_NOBAYES = {
+    "ml": [(0.0, 0.2), (1.0, 0.8)],
+    "map": [(0.0, 0.015625), (0.3, 0.6), (1.0, 0.7)],
+}
+
+
 # Cases for the open head beyond the Bayes ones: tied and near-tied logits, large logits
 # (the softmax at a temperature), and logits far outside every axis (q from the unknown).
 OPEN_CASES = [
@@ -539,6 +626,16 @@ OPEN_CASES = [
     ("open near-tied logits", [1.0, up(1.0), -1.0], 1.0),
     ("open every logit far outside", [1e6, -1e6, 1e6], 1.0),
     ("open inside every axis", [1.0, 0.2, -1.5], 0.9),
+]
+
+
+# Cases aimed at the maps: top scores on and between knots, and all-zero scores.
+MAP_CASES = [
+    ("maps objectness on a knot", [3.5, -1.9, -3.9], 0.5),
+    ("maps objectness between knots", [3.5, -1.9, -3.9], 0.3),
+    ("maps objectness quarter", [0.5, 0.5, 0.5], 0.25),
+    ("maps objectness 0", [3.5, -1.9, -3.9], 0.0),
+    ("maps objectness 1 inside", [2.5, 0.5, -1.5], 1.0),
 ]
 
 
@@ -614,6 +711,46 @@ def write_open_csv(path, k, rows, regenerate):
             fh.write(",".join(r) + "\n")
 
 
+def maps_rows(name, t, cases):
+    """One CSV row per case for a table with maps: inputs, every head's mapped scores
+    (empty for a head the table lacks), or the error."""
+    k = t["k"]
+    rows = []
+    for case, x, os_ in cases:
+        x = [float(np.float32(v)) for v in x]
+        os_ = float(np.float32(os_))
+        try:
+            scores = []
+            for head in MAP_HEADS:
+                has = {"bayes": t["bayes"] is not None, "open": t["open"] is not None}
+                if has.get(head, True):
+                    scores += list(head_scores(t, head, x, os_))
+                else:
+                    scores += [None] * k
+            err = ""
+        except InferenceError as e:
+            scores, err = [None] * (4 * k), str(e)
+        rows.append([name, case, fmt(os_)] + [fmt(v) for v in x]
+                    + ["" if v is None else fmt(v) for v in scores] + [err])
+    return rows
+
+
+def write_maps_csv(path, k, rows, regenerate):
+    head = ["table", "case", "objectness"] + ["x%d" % i for i in range(k)]
+    for h in MAP_HEADS:
+        head += ["%s%d" % (h, i) for i in range(k)]
+    head += ["error"]
+    with open(path, "w") as fh:
+        fh.write("# Expected scores of every head after its recalibration map (float64) from "
+                 "tools/mlmap_ref.py, numpy %s.\n" % np.__version__)
+        fh.write("# Regenerate: %s\n" % regenerate)
+        fh.write("# A head's columns are empty when the table lacks it.\n")
+        fh.write("# error: empty, nan_logit:<first NaN class> or objectness.\n")
+        fh.write(",".join(head) + "\n")
+        for r in rows:
+            fh.write(",".join(r) + "\n")
+
+
 def default_cases(t, n, seed):
     """n random logit vectors over the shipped table, aimed at every region of every class."""
     rng = np.random.default_rng(seed)
@@ -677,18 +814,26 @@ def goldens(outdir):
                      open_=SMALL_OPEN)
     open_nobg = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES_NOBG,
                        open_=SMALL_OPEN_NOBG)
+    # Recalibration maps: on the open table with background (every head has one), and on
+    # the table without a Bayes head (ML and MAP only).
+    maps_all = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES,
+                      open_=SMALL_OPEN, maps=SMALL_MAPS)
+    maps_nobayes = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, maps=SMALL_MAPS_NOBAYES)
     files = (("small", small), ("small_clamp", clamp), ("small_bayes", with_bg),
              ("small_bayes_nobg", no_bg), ("small_open", open_bg),
-             ("small_open_nobg", open_nobg))
-    rows, open_table_rows = [], []
+             ("small_open_nobg", open_nobg), ("small_maps", maps_all),
+             ("small_maps_nobayes", maps_nobayes))
+    rows, open_table_rows, map_table_rows = [], [], []
     for name, data in files:
         with open(os.path.join(outdir, name + ".mlmap"), "wb") as fh:
             fh.write(data)
         t = decode(data)
         assert encode(t["classes"], t["lambda_ml"], t["lambda_map"], t["edge_mode"],
-                      t["upper_tail"], t["bayes"], t["open"]) == data
+                      t["upper_tail"], t["bayes"], t["open"], t["maps"] or None) == data
         cases = SMALL_CASES + (BAYES_CASES if t["bayes"] is not None else [])
-        if t["open"] is not None:
+        if t["maps"]:
+            map_table_rows += maps_rows(name, t, cases + OPEN_CASES + MAP_CASES)
+        elif t["open"] is not None:
             open_table_rows += open_rows(name, t, cases + OPEN_CASES)
         else:
             rows += golden_rows(name, t, cases)
@@ -702,6 +847,7 @@ def goldens(outdir):
     if t["open"] is not None:
         open_table_rows += open_rows("default", t, cases)
     write_open_csv(os.path.join(outdir, "open.csv"), 3, open_table_rows, regen)
+    write_maps_csv(os.path.join(outdir, "maps.csv"), 3, map_table_rows, regen)
     print("numpy %s: wrote %s" % (np.__version__, outdir))
 
 

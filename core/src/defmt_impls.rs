@@ -55,7 +55,7 @@ impl Format for crate::MapError {
             Self::KnotCount => write!(f, "knot count out of range"),
             Self::Ends => write!(f, "ends not at 0 and 1"),
             Self::Order => write!(f, "knots not increasing"),
-            Self::Values => write!(f, "values out of [0, 1] or decreasing"),
+            Self::Values => write!(f, "values out of (0, 1] or decreasing"),
             Self::NoHead => write!(f, "no such head"),
         }
     }

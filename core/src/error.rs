@@ -189,7 +189,7 @@ pub enum MapError {
     Ends,
     /// The knots' `x` are not strictly increasing (or one is NaN).
     Order,
-    /// A `y` is outside `[0, 1]` (or NaN, or `-0.0`), or the `y` decrease.
+    /// A `y` is outside `(0, 1]` (or NaN), or the `y` decrease.
     Values,
     /// The table has no such head.
     NoHead,
@@ -201,7 +201,7 @@ impl fmt::Display for MapError {
             Self::KnotCount => "it needs between 2 and 32 knots",
             Self::Ends => "its first knot is not at 0 or its last not at 1",
             Self::Order => "its knots are not strictly increasing in x",
-            Self::Values => "its values are not in [0, 1] and non-decreasing",
+            Self::Values => "its values are not in (0, 1] and non-decreasing",
             Self::NoHead => "the table has no such head",
         })
     }

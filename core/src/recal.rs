@@ -3,18 +3,20 @@
 //!
 //! ```text
 //! knots (x_0, y_0) .. (x_{n-1}, y_{n-1}),  2 <= n <= MAX_KNOTS,
-//!       x_0 = 0, x_{n-1} = 1, x strictly increasing, 0 <= y_0 <= .. <= y_{n-1} <= 1
+//!       x_0 = 0, x_{n-1} = 1, x strictly increasing, 0 < y_0 <= .. <= y_{n-1} <= 1
 //! g(t)  = min(y_i + (y_{i+1} - y_i) * min((t - x_i) / (x_{i+1} - x_i), 1), y_{i+1})
 //!         on the segment [x_i, x_{i+1}] that holds t
-//! s_c  <- (s_c / top) * g(top)    with top = max_c s_c; scores stay 0 when top = 0
+//! s_c  <- g(top)                                        when s_c = top
+//! s_c  <- min((s_c / top) * g(top), next_below(g(top)))  when s_c < top
+//!         with top = max_c s_c; scores stay 0 when top = 0
 //! ```
 //!
-//! `s_c / top` is in `[0, 1]` and exactly 1 for the top score, so the top score becomes
-//! `g(top)` exactly, every other score at most that, and the order of the classes within
-//! a detection is kept (division and multiplication by a positive number never reverse
-//! two floats). Each rounding step is monotone and the `min` with `y_{i+1}` keeps a
-//! segment's end from passing the next segment's start, so `g` never decreases in `f32`
-//! either.
+//! The top scores become `g(top) > 0` exactly and every other score stays strictly
+//! below them, so the decision is kept; division, multiplication by a positive number
+//! and the `min` never reverse two floats, so the order of the classes is kept too (two
+//! scores below the top may become equal). Each rounding step of `g` is monotone and the
+//! `min` with `y_{i+1}` keeps a segment's end from passing the next segment's start, so
+//! `g` never decreases in `f32` either.
 
 use crate::error::{Head, MapError};
 
@@ -43,7 +45,7 @@ impl Knot {
 /// # use mlmap_core as mlmap;
 /// use mlmap::{Knot, RecalMap};
 ///
-/// let knots = [Knot { x: 0.0, y: 0.0 }, Knot { x: 0.5, y: 0.2 }, Knot { x: 1.0, y: 0.9 }];
+/// let knots = [Knot { x: 0.0, y: 0.1 }, Knot { x: 0.5, y: 0.2 }, Knot { x: 1.0, y: 0.9 }];
 /// let g = RecalMap::new(&knots)?;
 /// assert_eq!(g.eval(0.5), 0.2);
 /// let mut scores = [0.5, 0.25, 0.0];
@@ -58,7 +60,7 @@ pub struct RecalMap<'a> {
 
 impl<'a> RecalMap<'a> {
     /// Checks the knots against DESIGN §1.9: 2 to [`MAX_KNOTS`] of them, the first at
-    /// `x = 0` and the last at `x = 1`, `x` strictly increasing, every `y` in `[0, 1]`
+    /// `x = 0` and the last at `x = 1`, `x` strictly increasing, every `y` in `(0, 1]`
     /// and non-decreasing.
     ///
     /// # Errors
@@ -131,7 +133,7 @@ pub(crate) fn check(knots: &[Knot]) -> Result<(), MapError> {
     }
     let mut prev: Option<&Knot> = None;
     for k in knots {
-        if !(0.0..=1.0).contains(&k.y) || k.y.is_sign_negative() {
+        if !(k.y > 0.0 && k.y <= 1.0) {
             return Err(MapError::Values);
         }
         if let Some(p) = prev {
@@ -196,23 +198,27 @@ mod tests {
     #[test]
     fn rule() {
         let ok = [k(0.0, 0.1), k(0.4, 0.1), k(1.0, 0.95)];
+        assert_eq!(
+            RecalMap::new(&[k(0.0, 0.0), k(1.0, 1.0)]),
+            Err(MapError::Values)
+        );
         assert!(RecalMap::new(&ok).is_ok());
         assert_eq!(RecalMap::new(&ok[..1]), Err(MapError::KnotCount));
-        assert_eq!(RecalMap::new(&[k(0.0, 0.0); 33]), Err(MapError::KnotCount));
+        assert_eq!(RecalMap::new(&[k(0.0, 0.5); 33]), Err(MapError::KnotCount));
         assert_eq!(
-            RecalMap::new(&[k(0.1, 0.0), k(1.0, 1.0)]),
+            RecalMap::new(&[k(0.1, 0.5), k(1.0, 1.0)]),
             Err(MapError::Ends)
         );
         assert_eq!(
-            RecalMap::new(&[k(-0.0, 0.0), k(1.0, 1.0)]),
+            RecalMap::new(&[k(-0.0, 0.5), k(1.0, 1.0)]),
             Err(MapError::Ends)
         );
         assert_eq!(
-            RecalMap::new(&[k(0.0, 0.0), k(0.9, 1.0)]),
+            RecalMap::new(&[k(0.0, 0.5), k(0.9, 1.0)]),
             Err(MapError::Ends)
         );
         assert_eq!(
-            RecalMap::new(&[k(0.0, 0.0), k(0.5, 0.3), k(0.5, 0.4), k(1.0, 1.0)]),
+            RecalMap::new(&[k(0.0, 0.1), k(0.5, 0.3), k(0.5, 0.4), k(1.0, 1.0)]),
             Err(MapError::Order)
         );
         assert_eq!(
@@ -220,7 +226,7 @@ mod tests {
             Err(MapError::Values)
         );
         assert_eq!(
-            RecalMap::new(&[k(0.0, 0.0), k(1.0, 1.5)]),
+            RecalMap::new(&[k(0.0, 0.5), k(1.0, 1.5)]),
             Err(MapError::Values)
         );
         assert_eq!(
@@ -228,7 +234,7 @@ mod tests {
             Err(MapError::Values)
         );
         assert_eq!(
-            RecalMap::new(&[k(0.0, 0.0), k(f32::NAN, 0.5), k(1.0, 1.0)]),
+            RecalMap::new(&[k(0.0, 0.1), k(f32::NAN, 0.5), k(1.0, 1.0)]),
             Err(MapError::Order)
         );
     }
@@ -236,19 +242,23 @@ mod tests {
     /// Values worked by hand.
     #[test]
     fn eval_by_hand() {
-        let knots = [k(0.0, 0.0), k(0.5, 0.25), k(0.75, 0.25), k(1.0, 1.0)];
+        let knots = [k(0.0, 0.125), k(0.5, 0.25), k(0.75, 0.25), k(1.0, 1.0)];
         let g = RecalMap::new(&knots).unwrap();
-        assert_eq!(g.eval(0.0), 0.0);
-        assert_eq!(g.eval(0.25), 0.125);
+        assert_eq!(g.eval(0.0), 0.125);
+        assert_eq!(g.eval(0.25), 0.1875);
         assert_eq!(g.eval(0.5), 0.25);
         assert_eq!(g.eval(0.6), 0.25);
         assert_eq!(g.eval(0.875), 0.625);
         assert_eq!(g.eval(1.0), 1.0);
         assert_eq!(g.eval(2.0), 1.0);
-        assert_eq!(g.eval(-1.0), 0.0);
-        let mut s = [0.5, 0.25, 0.125];
+        assert_eq!(g.eval(-1.0), 0.125);
+        let mut s = [0.5, 0.25, 0.125, 0.5];
         g.apply(&mut s);
-        assert_eq!(s, [0.25, 0.125, 0.0625]);
+        assert_eq!(s, [0.25, 0.125, 0.0625, 0.25]);
+        // A score one step below the top stays below the mapped top.
+        let mut s = [0.75, 0.75f32.next_down()];
+        g.apply(&mut s);
+        assert_eq!(s, [0.25, 0.25f32.next_down()]);
         let mut zero = [0.0; 3];
         g.apply(&mut zero);
         assert_eq!(zero, [0.0; 3]);

@@ -48,7 +48,14 @@ mod limits {
 use limits::{FAST_CLASSES, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES, MAX_CLASSES};
 
 /// The table type behind the opaque `mlmap_table_t`.
-type Inner = BoundedTable<MAX_CLASSES, MAX_BINS, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES>;
+type Inner = BoundedTable<
+    MAX_CLASSES,
+    MAX_BINS,
+    MAX_BINS,
+    MAX_BINS_BAYES,
+    MAX_CATEGORIES,
+    { mlmap::MAX_KNOTS },
+>;
 
 /// The view scoring runs on.
 type View<'a> = TableView<'a, Bounded<MAX_BINS>, Bounded<MAX_BINS>>;
@@ -66,9 +73,11 @@ const TAG: u64 = u64::from_le_bytes(*b"MLMPtab1");
 
 /// `MLMAP_TABLE_SIZE` of the header, in 8-byte words: an upper bound of the size of
 /// [`Storage`] for any maximum shape (the header computes the same formula, and the
-/// assertion below checks the bound at compile time).
+/// assertion below checks the bound at compile time). 1288 bytes of it are the fixed
+/// part: 256, and room for a recalibration map of `MAX_KNOTS` knots per head (4 * 32
+/// knots of 8 bytes, 4 lengths, padding).
 const fn table_words(classes: usize, bins: usize, bins_bayes: usize) -> usize {
-    (256 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes)).div_ceil(8)
+    (1288 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes)).div_ceil(8)
 }
 
 const _: () =

@@ -24,7 +24,7 @@ fn demo_runs_the_whole_job() {
         "\n1. fit (authors' detection settings)\n",
         "\n2. tune lambdas on ",
         "\n3. evaluate on ",
-        "\n4. no_std layer: Table<3, 22, 17, 22, 4>::from_bytes(out/tuned.mlmap) scored 10000 test rows: 0 with scores differing from the host's in any bit\n",
+        "\n4. no_std layer: Table<3, 22, 17, 22, 4, 32>::from_bytes(out/tuned.mlmap) scored 10000 test rows: 0 with scores differing from the host's in any bit\n",
         "\nsummary\n",
         "\n  head to ship: ",
     ];

@@ -32,15 +32,15 @@ fn a_newer_table_format_names_the_versions_read() {
     let d = dir.path();
     let mut bytes = std::fs::read(bayes_table()).unwrap();
     // The version follows the 4-byte magic; the CRC-32 of the rest ends the file.
-    bytes[4] = 4;
+    bytes[4] = 5;
     let body = bytes.len() - 4;
     let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&bytes[..body]);
     bytes[body..].copy_from_slice(&crc.to_le_bytes());
-    std::fs::write(d.join("v4.mlmap"), &bytes).unwrap();
+    std::fs::write(d.join("v5.mlmap"), &bytes).unwrap();
     refused(
         d,
-        &["inspect", "v4.mlmap"],
-        &["version 4 is not supported (this build reads versions 1 to 3)"],
+        &["inspect", "v5.mlmap"],
+        &["version 5 is not supported (this build reads versions 1 to 4)"],
     );
 }
 

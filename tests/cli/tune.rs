@@ -1,7 +1,7 @@
 use std::path::Path;
 
 use mlmap::host::metrics::{self, MetricsConfig};
-use mlmap::{EdgeMode, UpperTail};
+use mlmap::{EdgeMode, Head, UpperTail};
 
 use super::*;
 
@@ -51,7 +51,8 @@ fn tune_writes_the_best_candidates_and_its_objective_matches_the_metrics() {
     let d = dir.path();
     let (train, val) = (data("train"), data("val"));
     let mut args = tune_args("j.mlmap", &train, &val);
-    args.extend(["--format", "json", "--top", "3"]);
+    // The heads' own scores: the candidates' metrics are the written table's.
+    args.extend(["--format", "json", "--top", "3", "--no-maps"]);
     let v = ok_json(d, &args);
     let t = read_table(&d.join("j.mlmap"));
     assert_eq!(v["objective"], "ece");
@@ -97,7 +98,9 @@ fn tune_writes_the_best_candidates_and_its_objective_matches_the_metrics() {
     }
 
     // The text report: the rank-1 rows and the summary name the written settings.
-    let run = ok(d, &tune_args("t.mlmap", &train, &val));
+    let mut text_args = tune_args("t.mlmap", &train, &val);
+    text_args.push("--no-maps".into());
+    let run = ok(d, &text_args);
     assert_eq!(
         std::fs::read(d.join("t.mlmap")).unwrap(),
         std::fs::read(d.join("j.mlmap")).unwrap()
@@ -175,6 +178,7 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
     let (train, val, ood) = (data("train"), data("val"), data("ood"));
     let mut args = tune_args("t.mlmap", &train, &val);
     args.extend([
+        "--no-maps",
         "--ood",
         &ood,
         "--max-accuracy-loss",
@@ -342,4 +346,67 @@ fn tune_without_the_bayes_head_and_bad_guards() {
         args.extend([flag, value]);
         refused(d, &args, &[flag]);
     }
+}
+
+/// DESIGN §1.9: a map per head, kept only where it lowers the cross-fitted ECE within
+/// the guards; the written table holds exactly the kept maps, and they lower the ECE the
+/// comparison reports against the same run without maps.
+#[test]
+fn tune_keeps_a_map_only_where_it_lowers_the_ece() {
+    let dir = tempdir();
+    let d = dir.path();
+    let (train, val) = (data("train"), data("val"));
+    let mut with = tune_args("m.mlmap", &train, &val);
+    with.extend(["--format", "json"]);
+    let v = ok_json(d, &with);
+    let mut without = tune_args("n.mlmap", &train, &val);
+    without.extend(["--format", "json", "--no-maps"]);
+    let w = ok_json(d, &without);
+    assert!(w.get("maps").is_none());
+    let t = read_table(&d.join("m.mlmap"));
+    let maps = v["maps"].as_object().unwrap();
+    let mut kept = 0;
+    for (name, head) in [
+        ("ml", Head::Ml),
+        ("map", Head::Map),
+        ("bayes", Head::Bayes),
+        ("open", Head::Open),
+    ] {
+        let m = &maps[name];
+        let knots: Vec<(f32, f32)> = m["knots"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|k| (k[0].as_f64().unwrap() as f32, k[1].as_f64().unwrap() as f32))
+            .collect();
+        assert!((2..=32).contains(&knots.len()), "{name}");
+        assert_eq!(knots[0].0, 0.0);
+        assert_eq!(knots[knots.len() - 1].0, 1.0);
+        assert!(knots
+            .windows(2)
+            .all(|p| p[0].0 < p[1].0 && p[0].1 <= p[1].1));
+        let (before, after) = (
+            m["cv_ece_without"].as_f64().unwrap(),
+            m["cv_ece_with"].as_f64().unwrap(),
+        );
+        let stored = t.recal_map(head);
+        if m["kept"] == true {
+            kept += 1;
+            assert!(after < before, "{name}: {after} vs {before}");
+            assert_eq!(m["within_guards"], true, "{name}");
+            let stored: Vec<(f32, f32)> =
+                stored.unwrap().knots().iter().map(|k| (k.x, k.y)).collect();
+            assert_eq!(stored, knots, "{name}");
+            let ece =
+                |j: &serde_json::Value| j["validation"]["methods"][name]["ece"].as_f64().unwrap();
+            assert!(ece(&v) < ece(&w), "{name}: {} vs {}", ece(&v), ece(&w));
+        } else {
+            assert!(stored.is_none(), "{name}");
+            assert!(after >= before || m["within_guards"] == false, "{name}");
+        }
+    }
+    assert!(kept >= 1, "{maps:?}");
+    // The same table without its maps is the run without maps, byte for byte.
+    let n = std::fs::read(d.join("n.mlmap")).unwrap();
+    assert_eq!(t.without_maps().to_vec().unwrap(), n);
 }

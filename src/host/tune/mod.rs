@@ -32,7 +32,7 @@ use std::{format, vec};
 pub use self::bayes::{search_bayes, BayesSearchParams};
 pub use self::open::{epsilon_grid, search_open, OpenSearchParams};
 pub use self::pipeline::{tune, BayesGrid, Compared, Comparison, TuneParams, Tuned};
-pub use self::recal::{choose_maps, fit_map, MapChoice, MAP_GROUPS};
+pub use self::recal::{choose_maps, fit_map, MapChoice, MAP_GROUPS, MIN_SHARE};
 use crate::host::metrics::{Accumulator, Metrics, MetricsConfig, Parts};
 use crate::host::names::{Name, Named};
 use crate::{scores_from_evidence, Gaussian, Head, Histogram, Libm, UpperTail};

@@ -11,6 +11,10 @@ use crate::host::metrics::decision;
 use crate::host::DynTable;
 use crate::{Head, Knot, RecalMap};
 
+/// The smallest value a fitted map takes: a group with no right decision gets it
+/// (DESIGN §1.9 keeps every value positive, so that a mapped top score stays the top).
+pub const MIN_SHARE: f32 = 1.0e-4;
+
 /// Most groups the top scores are pooled into before the isotonic regression: with a
 /// knot at 0 and one at 1, a map has at most 32 knots.
 pub const MAP_GROUPS: usize = 30;
@@ -20,7 +24,8 @@ pub const MAP_GROUPS: usize = 30;
 /// scores stay in one group), the groups' shares of right decisions are made
 /// non-decreasing by pool-adjacent-violators weighted by their sizes, and each group
 /// gives a knot at its mean score with its pooled share; the first share is repeated at
-/// 0 and the last at 1. `None` without points or with a score outside `[0, 1]`.
+/// 0 and the last at 1; a share of 0 becomes [`MIN_SHARE`]. `None` without points or
+/// with a score outside `[0, 1]`.
 pub fn fit_map(points: &[(f32, bool)]) -> Option<Vec<Knot>> {
     if points.is_empty() || points.iter().any(|p| !(0.0..=1.0).contains(&p.0)) {
         return None;
@@ -58,12 +63,13 @@ pub fn fit_map(points: &[(f32, bool)]) -> Option<Vec<Knot>> {
         }
         blocks.push(b);
     }
+    // A share of 0 becomes MIN_SHARE: a map's values are positive (DESIGN §1.9).
     let shares = blocks
         .iter()
         .flat_map(|&(right, rows, covers)| {
             std::iter::repeat_n((right as f64 / rows as f64) as f32, covers)
         })
-        .map(|y| y.clamp(0.0, 1.0));
+        .map(|y| y.clamp(MIN_SHARE, 1.0));
     let mut knots: Vec<Knot> = Vec::with_capacity(MAP_GROUPS + 2);
     for (&(sum, _, rows), y) in groups.iter().zip(shares) {
         let x = ((sum / rows as f64) as f32).clamp(0.0, 1.0);
@@ -270,8 +276,8 @@ mod tests {
         assert_eq!(
             xy,
             [
-                (0.0, 0.0),
-                (0.2, 0.0),
+                (0.0, MIN_SHARE),
+                (0.2, MIN_SHARE),
                 (0.4, 0.5),
                 (0.6, 0.5),
                 (0.8, 1.0),
@@ -286,7 +292,16 @@ mod tests {
         let mut pts = vec![(0.0, false); 50];
         pts.extend(vec![(1.0, true); 50]);
         let knots = fit_map(&pts).unwrap();
-        assert_eq!(knots, [Knot { x: 0.0, y: 0.0 }, Knot { x: 1.0, y: 1.0 }]);
+        assert_eq!(
+            knots,
+            [
+                Knot {
+                    x: 0.0,
+                    y: MIN_SHARE
+                },
+                Knot { x: 1.0, y: 1.0 }
+            ]
+        );
         let many: Vec<(f32, bool)> = (0..10_000)
             .map(|i| (i as f32 / 10_000.0, i % 3 == 0))
             .collect();

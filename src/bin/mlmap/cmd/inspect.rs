@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use mlmap::host::escape::visible;
 use mlmap::host::names::Named;
 use mlmap::host::{DynQTable, DynTable};
-use mlmap::{BayesView, Histogram};
+use mlmap::{BayesView, Head, Histogram};
 
 use crate::args::{Format, InspectArgs};
 use crate::error::Result;
@@ -337,12 +337,40 @@ fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -
             let _ = writeln!(s, "\nopen head   none");
         }
     }
+    let _ = writeln!(s, "\nrecalibration maps (DESIGN §1.9: top score -> g(top))");
+    let mut any = false;
+    for head in HEADS {
+        if let Some(m) = t.recal_map(head) {
+            any = true;
+            let knots: Vec<String> = m
+                .knots()
+                .iter()
+                .map(|k| format!("{:.4}->{:.4}", k.x, k.y))
+                .collect();
+            let _ = writeln!(
+                s,
+                "  {:<6} {} knots: {}",
+                head.name(),
+                knots.len(),
+                knots.join(" ")
+            );
+        }
+    }
+    if !any {
+        let _ = writeln!(s, "  none");
+    }
     s
 }
 
-/// The format version the table is written in (DESIGN §3): 3 with the open head, 2
-/// with the Bayes head only, 1 otherwise.
+/// Every head, in the order of a table's maps.
+const HEADS: [Head; 4] = [Head::Ml, Head::Map, Head::Bayes, Head::Open];
+
+/// The format version the table is written in (DESIGN §3): 4 with a recalibration
+/// map, 3 with the open head, 2 with the Bayes head only, 1 otherwise.
 fn file_version(t: &DynTable) -> u16 {
+    if HEADS.iter().any(|&h| t.recal_map(h).is_some()) {
+        return 4;
+    }
     match (t.bayes().is_some(), t.open().is_some()) {
         (_, true) => 3,
         (true, false) => 2,
@@ -407,6 +435,15 @@ fn render_json(
             "epsilon": o.epsilon(),
             "log_unknown": o.log_unknown(),
         })),
+        "maps": HEADS
+            .iter()
+            .filter_map(|&h| {
+                t.recal_map(h).map(|m| {
+                    let knots: Vec<[f32; 2]> = m.knots().iter().map(|k| [k.x, k.y]).collect();
+                    (h.name().to_string(), serde_json::json!(knots))
+                })
+            })
+            .collect::<serde_json::Map<String, serde_json::Value>>(),
         "quantized": quantized.map(|q| quantized_json(q, &names)),
     });
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
