@@ -7,7 +7,7 @@
 
 use mlmap::invariants::{check_open_decision, check_scores, Sum};
 use mlmap::{
-    dequantize, quantize_into, quantized_len, Code, InferError, OpenParams, QField, QParams,
+    dequantize, quantize_into, quantized_len, Code, Head, InferError, OpenParams, QField, QParams,
     QTable, QTableError, QuantizeError, Scores, Table,
 };
 
@@ -37,8 +37,8 @@ fn open_bits(o: Option<OpenParams>) -> Option<[u32; 3]> {
 }
 
 /// The quantized section of `t` for `params`.
-fn section<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
-    t: &Table<3, BM, BP, BB, C>,
+fn section<const BM: usize, const BP: usize, const BB: usize, const C: usize, const N: usize>(
+    t: &Table<3, BM, BP, BB, C, N>,
     params: &QParams<'_>,
 ) -> Vec<u8> {
     let n = quantized_len(&t.view(), params).expect("valid parameters");
@@ -55,8 +55,15 @@ fn bits<const K: usize>(s: Result<Scores<K>, mlmap::InferError>) -> [u32; K] {
 /// Every head of `q` against the `f32` table on the dequantized logits, for codes that
 /// run through every value of `all` for one class at a time, the others taking values
 /// from `others`.
-fn agree<const BM: usize, const BP: usize, const BB: usize, const C: usize, Q: Code + Copy>(
-    t: &Table<3, BM, BP, BB, C>,
+fn agree<
+    const BM: usize,
+    const BP: usize,
+    const BB: usize,
+    const C: usize,
+    const N: usize,
+    Q: Code + Copy,
+>(
+    t: &Table<3, BM, BP, BB, C, N>,
     q: &QTable<'_, 3, Q>,
     (scales, zps): ([f32; 3], [i32; 3]),
     all: &[Q],
@@ -112,8 +119,11 @@ fn agree<const BM: usize, const BP: usize, const BB: usize, const C: usize, Q: C
                                 what()
                             );
                             // DESIGN §1.8 without the f32 layer: within [0, OS], summing
-                            // to at most OS, and the detector's decision.
-                            check_scores(&s.0, os, Sum::AtMost).unwrap();
+                            // to at most OS, and the detector's decision (a map keeps
+                            // the decision, and makes the top score g(top)).
+                            if N == 0 {
+                                check_scores(&s.0, os, Sum::AtMost).unwrap();
+                            }
                             check_open_decision(&s.0, &x).unwrap();
                         } else {
                             assert_eq!(q.open(&codes, os), Err(InferError::NoOpenHead));
@@ -139,8 +149,14 @@ fn param_sets() -> Vec<([f32; 3], [i32; 3])> {
     ]
 }
 
-fn int8_everywhere<const BM: usize, const BP: usize, const BB: usize, const C: usize>(
-    t: &Table<3, BM, BP, BB, C>,
+fn int8_everywhere<
+    const BM: usize,
+    const BP: usize,
+    const BB: usize,
+    const C: usize,
+    const N: usize,
+>(
+    t: &Table<3, BM, BP, BB, C, N>,
 ) {
     let all: Vec<i8> = (i8::MIN..=i8::MAX).collect();
     let others = [-128i8, -40, -1, 0, 37, 127];
@@ -157,7 +173,15 @@ fn int8_everywhere<const BM: usize, const BP: usize, const BB: usize, const C: u
         // The open head comes with the Bayes head when the table has it, with the very
         // parameters (the unknown's log-score derived to the same bits).
         assert_eq!(open_bits(q.open_params()), open_bits(t.open_params()));
-        assert_eq!(bytes[4], if t.open_params().is_some() { 2 } else { 1 });
+        let maps = [Head::Ml, Head::Map, Head::Bayes, Head::Open]
+            .iter()
+            .any(|&h| t.recal_map(h).is_some());
+        let version = match (maps, t.open_params().is_some()) {
+            (true, _) => 3,
+            (false, true) => 2,
+            (false, false) => 1,
+        };
+        assert_eq!(bytes[4], version);
         let n = agree(t, &q, (scales, zps), &all, &others);
         assert_eq!(n, 3 * 256 * 36 * 2);
     }
@@ -175,6 +199,64 @@ fn int8_equals_f32_layer_for_every_code_small_tables() {
     int8_everywhere(&small_clamp());
     int8_everywhere(&small_bayes());
     int8_everywhere(&small_bayes_nobg());
+}
+
+/// DESIGN §1.9: the maps of every head, in the section (version 3) and applied by the
+/// quantized heads bit for bit as by the f32 layer; the table without a Bayes head
+/// keeps its ML and MAP maps.
+#[test]
+fn int8_maps_equal_f32_layer_for_every_code() {
+    let t = Table::<3, 4, 2, 4, 4, { mlmap::MAX_KNOTS }>::from_bytes(include_bytes!(
+        "golden/layer/small_maps.mlmap"
+    ))
+    .unwrap();
+    int8_everywhere(&t);
+    let t = Table::<3, 4, 2, 0, 0, { mlmap::MAX_KNOTS }>::from_bytes(include_bytes!(
+        "golden/layer/small_maps_nobayes.mlmap"
+    ))
+    .unwrap();
+    int8_everywhere(&t);
+}
+
+/// A section built without the Bayes head from a table with maps on every head keeps the
+/// ML and MAP maps only; a corrupted knot is refused as `QField::Map`.
+#[test]
+fn section_maps_follow_the_heads_and_their_rule() {
+    let t = Table::<3, 4, 2, 4, 4, { mlmap::MAX_KNOTS }>::from_bytes(include_bytes!(
+        "golden/layer/small_maps.mlmap"
+    ))
+    .unwrap();
+    let (scales, zps) = ([0.05f32; 3], [0i32; 3]);
+    let p = QParams {
+        bits: 8,
+        scales: &scales,
+        zero_points: &zps,
+        bayes: false,
+    };
+    let bytes = section(&t, &p);
+    assert_eq!(bytes[4], 3);
+    let q = QTable::<3, i8>::from_bytes(&bytes).unwrap();
+    let codes = [60i8, -30, -70];
+    let x: [f32; 3] = std::array::from_fn(|i| dequantize(i32::from(codes[i]), 0.05, 0));
+    assert_eq!(bits(q.ml(&codes, 0.8)), bits(t.ml(&x, 0.8)));
+    assert_eq!(bits(q.map(&codes, 0.8)), bits(t.map(&x, 0.8)));
+    assert_eq!(q.bayes(&codes, 0.8), Err(InferError::NoBayesHead));
+    // The last knot of the last map (the MAP head's: x = 1, y = 1) sits before the
+    // 8-byte trailer; x = 0.5 breaks the rule (the last knot is not at 1).
+    let mut bad = bytes.clone();
+    let n = bad.len();
+    let at = n - 8 - 8;
+    assert_eq!(bad[at..at + 4], 1.0f32.to_le_bytes());
+    bad[at..at + 4].copy_from_slice(&0.5f32.to_le_bytes());
+    let crc = crc32(&bad[..n - 4]);
+    bad[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    assert_eq!(
+        QTable::<3, i8>::from_bytes(&bad).err(),
+        Some(QTableError::Invalid {
+            field: QField::Map,
+            class: 1
+        })
+    );
 }
 
 #[test]
@@ -604,9 +686,11 @@ fn malformed_sections_are_refused_with_their_error() {
             Err(QTableError::Corrupted),
         ),
         (
-            patched(&sec, 4, &[3]),
-            Err(QTableError::UnsupportedVersion { found: 3 }),
+            patched(&sec, 4, &[4]),
+            Err(QTableError::UnsupportedVersion { found: 4 }),
         ),
+        // Version 3 announces maps after the last record: there are none here.
+        (patched(&sec, 4, &[3]), Err(QTableError::Malformed)),
         (
             patched(&sec, 4, &[0]),
             Err(QTableError::UnsupportedVersion { found: 0 }),

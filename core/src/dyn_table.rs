@@ -174,7 +174,7 @@ impl DynTable {
         if !present {
             return Err(map_err(MapError::NoHead));
         }
-        recal::check(&knots).map_err(map_err)?;
+        recal::check(knots.as_slice()).map_err(map_err)?;
         self.check_names()?;
         if let Some(slot) = self.maps.get_mut(head_slot(head)) {
             *slot = knots;

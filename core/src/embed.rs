@@ -114,6 +114,11 @@ pub const fn part4(bytes: &'static [u8], at: usize, n: usize) -> &'static [[u8; 
     part(bytes, at, 4 * n).as_chunks::<4>().0
 }
 
+/// `n` 8-byte knots of bytes from `at`: a map of an embedded quantized section.
+pub const fn part8(bytes: &'static [u8], at: usize, n: usize) -> &'static [[u8; 8]] {
+    part(bytes, at, 8 * n).as_chunks::<8>().0
+}
+
 /// A quantized section's header fields, validated by the build script.
 #[allow(clippy::too_many_arguments)]
 pub const fn qmeta(
@@ -126,6 +131,7 @@ pub const fn qmeta(
     lambdas: [f32; 3],
     log_prior: &'static [[u8; 4]],
     open: Option<OpenParams>,
+    maps: [&'static [[u8; 8]]; 4],
     len: usize,
 ) -> Meta<'static> {
     Meta {
@@ -140,6 +146,7 @@ pub const fn qmeta(
         log_lambda: lambdas[2],
         log_prior,
         open,
+        maps,
         len,
     }
 }

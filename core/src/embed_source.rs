@@ -238,7 +238,18 @@ pub fn quantized_source(
             p.len()
         )
     };
+    let part8 = |p: &[[u8; 8]]| {
+        if p.is_empty() {
+            return "&[]".into();
+        }
+        format!(
+            "E::part8(&QUANTIZED_SECTION, {}, {})",
+            (p.as_ptr() as usize).wrapping_sub(base),
+            p.len()
+        )
+    };
     let m = &q.meta;
+    let maps: Vec<String> = m.maps.iter().map(|k| part8(k)).collect();
     let code = if m.bits == 8 { "i8" } else { "i16" };
     let open = open_source(m.open);
     let mut s = String::new();
@@ -302,7 +313,7 @@ pub fn quantized_source(
         s,
         "/// The embedded quantized section, validated at build time: no decoding at start-up.\n\
          pub static QUANTIZED: EmbeddedQTable = E::qtable(\n    \
-         E::qmeta({}, {}, {}, {}, {}, 0x{:08x}, [{}, {}, {}], {}, {open}, {}),\n    [{}],\n    [{}],\n);",
+         E::qmeta({}, {}, {}, {}, {}, 0x{:08x}, [{}, {}, {}], {}, {open}, [{}], {}),\n    [{}],\n    [{}],\n);",
         m.bits,
         m.k,
         m.bins_ml,
@@ -313,6 +324,7 @@ pub fn quantized_source(
         f(m.lambda_map),
         f(m.log_lambda),
         part4(m.log_prior),
+        maps.join(", "),
         m.len,
         classes.join(",\n     "),
         logits.join(",\n     ")

@@ -43,8 +43,8 @@ pub mod __embed_source {
 pub mod __embed {
     //! `const` constructors for build-script output; not part of the API.
     pub use crate::embed::{
-        axis, class_name, gaussian, histogram, knot, open, part, part4, qclass, qlogit, qmeta,
-        qtable, table, QLOGIT_NONE,
+        axis, class_name, gaussian, histogram, knot, open, part, part4, part8, qclass, qlogit,
+        qmeta, qtable, table, QLOGIT_NONE,
     };
 }
 mod embed;

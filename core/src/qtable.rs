@@ -36,25 +36,31 @@
 //!   and the unknown category's log-score as the table decoder derived it. The head's
 //!   log-scores are the Bayes head's, and its softmax runs on the dequantized logits
 //!   (DESIGN §1.8).
+//! * Maps (optional; section version 3): the table's recalibration maps (DESIGN §1.9)
+//!   for the heads the section holds, applied after each head as the `f32` layer does.
 
 use crate::bayes;
 use crate::error::{Head, InferError};
 use crate::layer::{self, Scores};
 use crate::math::Backend;
 use crate::open::{self, OpenParams};
+use crate::recal::{self, KnotBytes};
 use crate::view::{BayesBackend, OpenBackend};
 use crate::wire::CRC_CHECK;
 
 /// The four bytes a quantized section starts with.
 pub const QUANTIZED_MAGIC: [u8; 4] = *b"MLMQ";
 
-/// The newest quantized-section version: this build writes it for sections with the open
-/// head (DESIGN §1.8), and reads it and version 1 (a section without the open head, which
-/// is always written as version 1).
-pub const QUANTIZED_VERSION: u8 = 2;
+/// The newest quantized-section version: this build writes it for sections with a
+/// recalibration map (DESIGN §1.9), and reads it and versions 1 (no open head, no map)
+/// and 2 (the open head, no map), which it keeps writing for such sections.
+pub const QUANTIZED_VERSION: u8 = 3;
 
-/// The version of sections without the open head.
+/// The version of sections without the open head and without maps.
 pub(crate) const QUANTIZED_VERSION_1: u8 = 1;
+
+/// The version of sections with the open head and without maps.
+pub(crate) const QUANTIZED_VERSION_2: u8 = 2;
 
 /// Bytes of the open head's record (version 2): temperature, epsilon, unknown log-score.
 pub(crate) const OPEN_LEN: usize = 12;
@@ -200,6 +206,10 @@ pub enum QField {
     /// The open head's unknown log-score is not `-inf` with `epsilon` 0, or not finite
     /// with `epsilon` > 0.
     LogUnknown,
+    /// A recalibration map breaks the rule of DESIGN §1.9, repeats or misorders a head,
+    /// or is for a head the section does not hold (`class` is the head's code: 0 ML,
+    /// 1 MAP, 2 Bayes, 3 open).
+    Map,
 }
 
 impl QField {
@@ -219,6 +229,7 @@ impl QField {
             Self::LogUnknown => {
                 "open head's unknown log-score (not -inf for epsilon 0, or not finite)"
             }
+            Self::Map => "recalibration map (knots, head or order)",
         }
     }
 }
@@ -311,6 +322,8 @@ pub struct Meta<'a> {
     pub(crate) log_prior: &'a [[u8; 4]],
     /// The open head's parameters (version 2), `None` without that head.
     pub(crate) open: Option<OpenParams>,
+    /// The heads' recalibration maps (version 3), ML, MAP, Bayes, open; empty: none.
+    pub(crate) maps: [&'a [[u8; 8]]; 4],
     /// Length of the section, trailer included.
     pub(crate) len: usize,
 }
@@ -452,11 +465,9 @@ pub(crate) fn parse<'a>(
     let mut r = Reader(section.get(..body_len).unwrap_or(&[]));
     let _magic = r.take(4)?;
     let version = r.u8()?;
-    if !(version == QUANTIZED_VERSION_1 || version == QUANTIZED_VERSION) {
+    if !(QUANTIZED_VERSION_1..=QUANTIZED_VERSION).contains(&version) {
         return Err(QTableError::UnsupportedVersion { found: version });
     }
-    // Version 2 is the version of sections with the open head, which needs the Bayes head.
-    let has_open = version == QUANTIZED_VERSION;
     let bits = r.u8()?;
     let flags = r.u8()?;
     let reserved = r.u8()?;
@@ -468,10 +479,18 @@ pub(crate) fn parse<'a>(
     let lambda_ml = r.f32()?;
     let lambda_map = r.f32()?;
     let log_lambda = r.f32()?;
-    if reserved != 0 || flags > 1 || (has_open && flags != 1) {
+    // Flags: bit 0 the Bayes head; in version 3, bit 1 the open head (which needs the
+    // Bayes head). Version 2 is the version of sections with the open head.
+    let has_maps = version == QUANTIZED_VERSION;
+    let max_flags = if has_maps { 3 } else { 1 };
+    let has_open = version == QUANTIZED_VERSION_2 || (has_maps && flags & 2 != 0);
+    if reserved != 0 || flags > max_flags || (has_open && flags & 1 == 0) {
         return Err(QTableError::Malformed);
     }
-    let has_bayes = flags == 1;
+    if version == QUANTIZED_VERSION_2 && flags != 1 {
+        return Err(QTableError::Malformed);
+    }
+    let has_bayes = flags & 1 == 1;
     if !(bits == 8 || bits == 16) || k < 2 || k == u16::MAX || bins_ml == 0 {
         return Err(invalid(QField::Shape, 0));
     }
@@ -615,6 +634,34 @@ pub(crate) fn parse<'a>(
             log_unknown: f32::from_bits(l),
         });
     }
+    let mut maps: [&'a [[u8; 8]]; 4] = [&[]; 4];
+    if has_maps {
+        // One or more records (head code, knot count, knots), head codes increasing.
+        let records = r.u8()?;
+        if records == 0 {
+            return Err(QTableError::Malformed);
+        }
+        let mut next = 0usize;
+        for _ in 0..records {
+            let code = usize::from(r.u8()?);
+            let n = usize::from(r.u8()?);
+            let bytes = r.take(8 * n)?;
+            let knots = bytes.as_chunks::<8>().0;
+            let held = match code {
+                0 | 1 => true,
+                2 => has_bayes,
+                3 => has_open,
+                _ => false,
+            };
+            if code < next || !held || recal::check(&KnotBytes(knots)).is_err() {
+                return Err(invalid(QField::Map, code));
+            }
+            if let Some(slot) = maps.get_mut(code) {
+                *slot = knots;
+            }
+            next = code + 1;
+        }
+    }
     if !r.0.is_empty() {
         return Err(QTableError::Malformed);
     }
@@ -630,6 +677,7 @@ pub(crate) fn parse<'a>(
         log_lambda,
         log_prior,
         open,
+        maps,
         len: section.len(),
     })
 }
@@ -688,7 +736,17 @@ impl<'a> QView<'_, 'a> {
             };
         }
         layer::normalise(out, scratch, objectness);
+        self.recalibrate(if head == Head::Map { 1 } else { 0 }, out);
         Ok(())
+    }
+
+    /// Applies the map in slot `slot` (0 ML, 1 MAP, 2 Bayes, 3 open), if any, as the
+    /// `f32` layer does (DESIGN §1.9).
+    #[inline(always)]
+    fn recalibrate(&self, slot: usize, out: &mut [f32]) {
+        if let Some(knots) = self.meta.maps.get(slot).filter(|k| !k.is_empty()) {
+            recal::apply(&KnotBytes(knots), out);
+        }
     }
 
     /// Bayes scores: the log-scores from the stored rows, then the `f32` head's softmax
@@ -706,6 +764,7 @@ impl<'a> QView<'_, 'a> {
         }
         self.log_scores_into(codes, objectness, out, scratch)?;
         bayes::softmax::<M>(scratch, objectness, out);
+        self.recalibrate(2, out);
         Ok(())
     }
 
@@ -733,6 +792,7 @@ impl<'a> QView<'_, 'a> {
             *x = dequantize(q, c.scale, c.zero_point);
         }
         open::score_from_log_scores::<M>(scratch, params, x, objectness, out);
+        self.recalibrate(3, out);
         Ok(())
     }
 
@@ -858,7 +918,7 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
             section.get(5).copied().unwrap_or(0),
         );
         let version = section.get(4).copied().unwrap_or(0);
-        if version == QUANTIZED_VERSION_1 || version == QUANTIZED_VERSION {
+        if (QUANTIZED_VERSION_1..=QUANTIZED_VERSION).contains(&version) {
             let expected = (u16::try_from(K).unwrap_or(u16::MAX), Q::BITS);
             if shape != expected {
                 return Err(QTableError::ShapeMismatch {

@@ -12,8 +12,9 @@ use crate::layer;
 use crate::math::Libm;
 use crate::qtable::{
     code_range, dequantize, index_width, HEADER_LEN, OPEN_LEN, QUANTIZED_MAGIC, QUANTIZED_VERSION,
-    QUANTIZED_VERSION_1,
+    QUANTIZED_VERSION_1, QUANTIZED_VERSION_2,
 };
+use crate::recal::Knot;
 use crate::view::TableView;
 use crate::wire::{self, CRC};
 
@@ -27,7 +28,8 @@ pub struct QParams<'p> {
     /// The zero point of each class's logits (K values, each in the code range).
     pub zero_points: &'p [i32],
     /// Whether to include the Bayes head (the table must have one). With it comes the
-    /// open head when the table has that too (the section is then version 2).
+    /// open head when the table has that too (the section is then version 2). The
+    /// table's recalibration maps of the heads the section holds come too (version 3).
     pub bayes: bool,
 }
 
@@ -161,16 +163,27 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
     let settings = table.settings();
     let bins_ml = narrow(table.bins_ml());
     let (bins_bayes, cats) = bayes.map_or((0, 0), |b| (narrow(b.bins()), narrow(b.categories())));
-    // The open head rides with the Bayes head: version 2 exactly when it is there, so a
-    // section without it keeps the bytes of version 1.
+    // The open head rides with the Bayes head. Version 3 exactly when a map of a head
+    // the section holds is there, else version 2 exactly when the open head is, so a
+    // section keeps the bytes of the oldest version that holds it.
     let open = bayes.and_then(|b| b.open());
-    let version = if open.is_some() {
+    let maps: [&[Knot]; 4] = core::array::from_fn(|slot| match slot {
+        0 | 1 => table.maps.0.get(slot).copied().unwrap_or_default(),
+        2 if bayes.is_some() => table.maps.0.get(slot).copied().unwrap_or_default(),
+        3 if open.is_some() => table.maps.0.get(slot).copied().unwrap_or_default(),
+        _ => &[],
+    });
+    let records = maps.iter().filter(|m| !m.is_empty()).count();
+    let version = if records > 0 {
         QUANTIZED_VERSION
+    } else if open.is_some() {
+        QUANTIZED_VERSION_2
     } else {
         QUANTIZED_VERSION_1
     };
+    let flags = u8::from(bayes.is_some()) | if records > 0 && open.is_some() { 2 } else { 0 };
     out.put(&QUANTIZED_MAGIC)?;
-    out.put(&[version, params.bits, u8::from(bayes.is_some()), 0])?;
+    out.put(&[version, params.bits, flags, 0])?;
     for v in [narrow(k), bins_ml, bins_bayes, cats] {
         out.put(&v.to_le_bytes())?;
     }
@@ -236,6 +249,20 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
             out.put(&v.to_le_bytes())?;
         }
         debug_assert_eq!(out.len - before, OPEN_LEN);
+    }
+    if records > 0 {
+        // At most 4 records of at most MAX_KNOTS knots: each count fits a byte.
+        out.put(&[u8::try_from(records).unwrap_or(0)])?;
+        for (code, knots) in maps.iter().enumerate().filter(|(_, m)| !m.is_empty()) {
+            out.put(&[
+                u8::try_from(code).unwrap_or(0),
+                u8::try_from(knots.len()).unwrap_or(0),
+            ])?;
+            for k in knots.iter() {
+                out.put(&k.x.to_le_bytes())?;
+                out.put(&k.y.to_le_bytes())?;
+            }
+        }
     }
     let len = u32::try_from(out.len + 8).map_err(|_| QuantizeError::TooLarge)?;
     out.put(&len.to_le_bytes())?;

@@ -86,44 +86,107 @@ impl<'a> RecalMap<'a> {
     /// `g(t)` for a top score `t` in `[0, 1]` (`t` below 0 is taken as 0, above 1 as 1).
     #[inline]
     pub fn eval(&self, t: f32) -> f32 {
-        let k = self.knots;
-        // The last knot at or below t starts the segment; the last segment holds t = 1.
-        let i = k
-            .partition_point(|p| p.x <= t)
-            .saturating_sub(1)
-            .min(k.len().saturating_sub(2));
-        match (k.get(i), k.get(i + 1)) {
-            (Some(a), Some(b)) => {
-                let f = ((t - a.x) / (b.x - a.x)).clamp(0.0, 1.0);
-                (a.y + (b.y - a.y) * f).min(b.y)
-            }
-            _ => t,
-        }
+        eval(self.knots, t)
     }
 
-    /// Rescales one detection's scores in place: each score `s` becomes
-    /// `(s / top) * g(top)`, `top` the largest; all-zero scores stay zero.
+    /// Rescales one detection's scores in place: the largest, `top`, becomes `g(top)`,
+    /// every other score `s` becomes `(s / top) * g(top)`, kept strictly below `g(top)`;
+    /// all-zero scores stay zero.
     #[inline]
     pub fn apply(&self, scores: &mut [f32]) {
-        let top = scores
-            .iter()
-            .fold(0.0f32, |m, &s| if s > m { s } else { m });
-        if !(top > 0.0) {
-            return;
+        apply(self.knots, scores);
+    }
+}
+
+/// Knots as stored: a slice of [`Knot`] (a table) or little-endian bytes (a quantized
+/// section in flash). The map's arithmetic is written once, over this.
+pub(crate) trait Knots {
+    /// Number of knots.
+    fn count(&self) -> usize;
+    /// Knot `i`.
+    fn knot(&self, i: usize) -> Option<Knot>;
+}
+
+impl Knots for [Knot] {
+    #[inline(always)]
+    fn count(&self) -> usize {
+        self.len()
+    }
+    #[inline(always)]
+    fn knot(&self, i: usize) -> Option<Knot> {
+        self.get(i).copied()
+    }
+}
+
+/// Knots as 8 little-endian bytes each (`x`, then `y`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct KnotBytes<'a>(pub(crate) &'a [[u8; 8]]);
+
+impl Knots for KnotBytes<'_> {
+    #[inline(always)]
+    fn count(&self) -> usize {
+        self.0.len()
+    }
+    #[inline(always)]
+    fn knot(&self, i: usize) -> Option<Knot> {
+        let b = self.0.get(i)?;
+        let (x, y) = b.split_at(4);
+        let f = |h: &[u8]| h.try_into().ok().map(f32::from_le_bytes);
+        Some(Knot { x: f(x)?, y: f(y)? })
+    }
+}
+
+/// `g(t)` of valid knots: the segment starts at the last knot at or below `t` (a
+/// binary search of at most 5 steps for 32 knots), the last segment holds `t = 1`.
+#[inline(always)]
+pub(crate) fn eval<S: Knots + ?Sized>(k: &S, t: f32) -> f32 {
+    // Candidates for the segment's first knot: [lo, lo + len).
+    let mut lo = 0usize;
+    let mut len = k.count().saturating_sub(1);
+    while len > 1 {
+        let half = len / 2;
+        let mid = lo + half;
+        if k.knot(mid).is_some_and(|p| p.x <= t) {
+            lo = mid;
         }
-        let g = self.eval(top);
-        for s in scores.iter_mut() {
-            *s = (*s / top) * g;
+        len -= half;
+    }
+    match (k.knot(lo), k.knot(lo + 1)) {
+        (Some(a), Some(b)) => {
+            let f = ((t - a.x) / (b.x - a.x)).clamp(0.0, 1.0);
+            (a.y + (b.y - a.y) * f).min(b.y)
         }
+        _ => t,
+    }
+}
+
+/// One detection's scores after the map of valid knots `k` (see [`RecalMap::apply`]).
+#[inline(always)]
+pub(crate) fn apply<S: Knots + ?Sized>(k: &S, scores: &mut [f32]) {
+    let top = scores
+        .iter()
+        .fold(0.0f32, |m, &s| if s > m { s } else { m });
+    if !(top > 0.0) {
+        return;
+    }
+    let g = eval(k, top);
+    let below = g.next_down();
+    for s in scores.iter_mut() {
+        *s = if *s == top {
+            g
+        } else {
+            ((*s / top) * g).min(below)
+        };
     }
 }
 
 /// The knots' rule (see [`RecalMap::new`]).
-pub(crate) fn check(knots: &[Knot]) -> Result<(), MapError> {
-    if !(2..=MAX_KNOTS).contains(&knots.len()) {
+pub(crate) fn check<S: Knots + ?Sized>(knots: &S) -> Result<(), MapError> {
+    let n = knots.count();
+    if !(2..=MAX_KNOTS).contains(&n) {
         return Err(MapError::KnotCount);
     }
-    let (Some(first), Some(last)) = (knots.first(), knots.last()) else {
+    let (Some(first), Some(last)) = (knots.knot(0), knots.knot(n - 1)) else {
         return Err(MapError::KnotCount);
     };
     // `== 0.0` also holds for -0.0, which is not the stored origin: refuse it so that the
@@ -131,8 +194,11 @@ pub(crate) fn check(knots: &[Knot]) -> Result<(), MapError> {
     if first.x != 0.0 || first.x.is_sign_negative() || last.x != 1.0 {
         return Err(MapError::Ends);
     }
-    let mut prev: Option<&Knot> = None;
-    for k in knots {
+    let mut prev: Option<Knot> = None;
+    for i in 0..n {
+        let Some(k) = knots.knot(i) else {
+            return Err(MapError::KnotCount);
+        };
         if !(k.y > 0.0 && k.y <= 1.0) {
             return Err(MapError::Values);
         }
