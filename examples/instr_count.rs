@@ -10,7 +10,8 @@
 //! backend), `map_micromath` (MAP with `Micromath`), `bayes` and `bayes_fast` (the Bayes head with
 //! `Libm` and `FastMath`), `open` (the open head as shipped: T = 1, epsilon = 0),
 //! `open_eps` (the open head with T = 1.37 and epsilon = 1e-3, an unknown category as
-//! `tune` chooses one), `sigmoid_fast` (the Sigmoid layer
+//! `tune` chooses one), `open_map` (`open_eps` with a recalibration map of 32 knots,
+//! DESIGN §1.9), `sigmoid_fast` (the Sigmoid layer
 //! with `FastMath`), `q8_ml`, `q8_map`, `q8_bayes`, `q8_open` (the quantized table, int8
 //! codes `round(x / 0.08)` of the same rows), `q8_noop` (the loop around the quantized
 //! kinds), `q8_decode` (`QTable::from_bytes` of the section), `decode`, and `noop` (a layer that only copies the logits: the cost
@@ -25,6 +26,8 @@ use mlmap::baseline::{sigmoid, softmax};
 use mlmap::{quantize_into, FastMath, InferError, Libm, Micromath, QParams, QTable, Scores, Table};
 
 type Shipped = Table<3, 22, 17, 22, 4>;
+/// The shipped shape with room for a map of 32 knots per head.
+type ShippedMaps = Table<3, 22, 17, 22, 4, { mlmap::MAX_KNOTS }>;
 
 const TABLE: &[u8] = include_bytes!("../tables/default.mlmap");
 const TEST_CSV: &str = include_str!("data/test.csv");
@@ -34,11 +37,14 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (Some(kind), Some(Ok(n))) = (args.first(), args.get(1).map(|n| n.parse::<usize>())) else {
         eprintln!(
-            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|open|open_eps|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_open|q8_decode N"
+            "usage: instr_count noop|sigmoid|sigmoid_fast|softmax|ml|map|map_fast|map_micromath|bayes|bayes_fast|open|open_eps|open_map|decode|q8_noop|q8_ml|q8_map|q8_bayes|q8_open|q8_decode N"
         );
         return ExitCode::from(2);
     };
     let mut table = Shipped::from_bytes(TABLE).expect("the shipped table decodes");
+    if kind == "open_map" {
+        return open_map(&table, n);
+    }
     if kind == "open_eps" {
         let d = mlmap::host::DynTable::from_table(&table)
             .with_open(1.37, 1e-3)
@@ -81,6 +87,34 @@ fn main() -> ExitCode {
         checksum += f64::from(black_box(s).map(|s| s.0[0]).unwrap_or(0.0));
     }
     println!("{kind} x {n}: checksum {checksum}");
+    ExitCode::SUCCESS
+}
+
+/// `open_eps` with a map of 32 knots on the open head: `x = i / 31`, `y` a concave
+/// curve, so that the binary search takes every path.
+fn open_map(table: &Shipped, n: usize) -> ExitCode {
+    let knots: Vec<mlmap::Knot> = (0..32)
+        .map(|i| {
+            let x = i as f32 / 31.0;
+            mlmap::Knot {
+                x,
+                y: 0.02 + 0.97 * x.sqrt(),
+            }
+        })
+        .collect();
+    let d = mlmap::host::DynTable::from_table(table)
+        .with_open(1.37, 1e-3)
+        .and_then(|d| d.with_map(mlmap::Head::Open, knots))
+        .expect("valid parameters");
+    let t = ShippedMaps::try_from(&d).expect("the same shape");
+    let (xs, os) = detections(table);
+    let mut checksum = 0.0f64;
+    for i in 0..n {
+        let r = i % ROWS;
+        let s = black_box(&t).open(black_box(&xs[r]), black_box(os[r]));
+        checksum += f64::from(black_box(s).map(|s| s.0[0]).unwrap_or(0.0));
+    }
+    println!("open_map x {n}: checksum {checksum}");
     ExitCode::SUCCESS
 }
 

@@ -11,7 +11,8 @@
 # fold the result into a checksum). Kinds: the Sigmoid layer with libm and with FastMath,
 # Softmax, ML, MAP with libm (`map`), FastMath (`map_fast`) and Micromath
 # (`map_micromath`), the Bayes head with libm (`bayes`) and FastMath (`bayes_fast`), the
-# open head as shipped (`open`: epsilon 0) and with an unknown category (`open_eps`),
+# open head as shipped (`open`: epsilon 0), with an unknown category (`open_eps`) and
+# with a 32-knot recalibration map besides (`open_map`, DESIGN §1.9),
 # decoding, and the quantized table on int8 codes of the same rows (`q8_ml`, `q8_map`,
 # `q8_bayes`, `q8_open`; `q8_noop` is their loop; `q8_decode` reads the section).
 set -euo pipefail
@@ -33,14 +34,14 @@ count() {
 
 declare -A per
 printf '%-14s %14s %14s %12s\n' kind "Ir(N=$n)" "Ir(2N)" "Ir/detection"
-for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast open open_eps decode q8_noop q8_ml q8_map q8_bayes q8_open q8_decode; do
+for kind in noop sigmoid sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast open open_eps open_map decode q8_noop q8_ml q8_map q8_bayes q8_open q8_decode; do
     a="$(count "$kind" "$n")"
     b="$(count "$kind" "$((2 * n))")"
     per[$kind]="$(python3 -c "print(f'{($b - $a) / $n:.1f}')")"
     printf '%-14s %14s %14s %12s\n' "$kind" "$a" "$b" "${per[$kind]}"
 done
 echo
-for kind in sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast open open_eps q8_ml q8_map q8_bayes q8_open; do
+for kind in sigmoid_fast softmax ml map map_fast map_micromath bayes bayes_fast open open_eps open_map q8_ml q8_map q8_bayes q8_open; do
     loop=noop
     [[ $kind == q8_* ]] && loop=q8_noop
     python3 -c "

@@ -170,7 +170,9 @@ pub(crate) fn apply<S: Knots + ?Sized>(k: &S, scores: &mut [f32]) {
         return;
     }
     let g = eval(k, top);
-    let below = g.next_down();
+    // The largest float below g: g is positive and finite (every y is), so its bits
+    // minus one.
+    let below = f32::from_bits(g.to_bits().wrapping_sub(1));
     for s in scores.iter_mut() {
         *s = if *s == top {
             g

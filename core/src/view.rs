@@ -78,7 +78,7 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     }
 
     /// Applies `head`'s map, if any, to one detection's scores.
-    #[inline]
+    #[inline(always)]
     fn recalibrate(&self, head: Head, out: &mut [f32]) {
         if let Some(g) = self.maps.get(head) {
             g.apply(out);
@@ -131,7 +131,7 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     ///
     /// As [`Table::ml`](crate::Table::ml), plus [`InferError::Length`] when a slice
     /// does not have K entries.
-    #[inline]
+    #[inline(always)]
     pub fn ml_into(
         &self,
         logits: &[f32],
@@ -160,7 +160,7 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     /// # Errors
     ///
     /// As [`TableView::ml_into`].
-    #[inline]
+    #[inline(always)]
     pub fn map_into<M: Backend>(
         &self,
         logits: &[f32],
@@ -192,7 +192,7 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     ///
     /// [`InferError::NoBayesHead`] for a table without that head; otherwise as
     /// [`TableView::ml_into`].
-    #[inline]
+    #[inline(always)]
     pub fn bayes_into<M: Backend>(
         &self,
         logits: &[f32],
@@ -220,7 +220,7 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     ///
     /// [`InferError::NoOpenHead`] for a table without that head; otherwise as
     /// [`TableView::ml_into`].
-    #[inline]
+    #[inline(always)]
     pub fn open_into<M: Backend>(
         &self,
         logits: &[f32],

@@ -99,7 +99,7 @@ fn tune_writes_the_best_candidates_and_its_objective_matches_the_metrics() {
 
     // The text report: the rank-1 rows and the summary name the written settings.
     let mut text_args = tune_args("t.mlmap", &train, &val);
-    text_args.push("--no-maps".into());
+    text_args.push("--no-maps");
     let run = ok(d, &text_args);
     assert_eq!(
         std::fs::read(d.join("t.mlmap")).unwrap(),
@@ -393,7 +393,7 @@ fn tune_keeps_a_map_only_where_it_lowers_the_ece() {
         if m["kept"] == true {
             kept += 1;
             assert!(after < before, "{name}: {after} vs {before}");
-            assert_eq!(m["within_guards"], true, "{name}");
+            assert_eq!(m["adds_no_loss"], true, "{name}");
             let stored: Vec<(f32, f32)> =
                 stored.unwrap().knots().iter().map(|k| (k.x, k.y)).collect();
             assert_eq!(stored, knots, "{name}");
@@ -402,7 +402,7 @@ fn tune_keeps_a_map_only_where_it_lowers_the_ece() {
             assert!(ece(&v) < ece(&w), "{name}: {} vs {}", ece(&v), ece(&w));
         } else {
             assert!(stored.is_none(), "{name}");
-            assert!(after >= before || m["within_guards"] == false, "{name}");
+            assert!(after >= before || m["adds_no_loss"] == false, "{name}");
         }
     }
     assert!(kept >= 1, "{maps:?}");

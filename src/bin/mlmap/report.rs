@@ -513,6 +513,7 @@ pub fn tune_json(
                         "cv_ece_without": finite(m.ece_without),
                         "cv_ece_with": finite(m.ece_with),
                         "within_guards": m.excess == 0.0,
+                        "adds_no_loss": m.excess <= m.excess_without,
                         "knots": knots,
                     }),
                 )
@@ -538,8 +539,8 @@ pub fn maps_text(maps: &[mlmap::host::tune::MapChoice]) -> String {
     for m in maps {
         let verdict = if m.kept {
             format!("kept, {} knots", m.knots.len())
-        } else if m.excess > 0.0 {
-            "not kept: outside the guards".to_string()
+        } else if m.excess > m.excess_without {
+            "not kept: it would lose accuracy or mAP beyond the guards".to_string()
         } else {
             "not kept: no lower ECE".to_string()
         };
