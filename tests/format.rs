@@ -742,6 +742,7 @@ fn small_bayes_bytes_equal_the_reference_encoder() {
             terms: raw.stored_terms(),
             rows: raw.rows,
             ranges: raw.ranges,
+            objectness: None,
         };
         let d = DynTable::new(small_settings(UpperTail::Zero), classes)
             .unwrap()
@@ -1129,6 +1130,7 @@ fn max_encoded_len_bounds_a_worst_case_bayes_head() {
             rows: vec![u64::MAX / C as u64; C],
             ranges: vec![(-3.0e30, 3.0e30); 3],
             terms,
+            objectness: None,
         };
         let worst = d.with_bayes(spec).unwrap().with_open(1e-6, 1e30).unwrap();
         let bytes = worst.to_vec().unwrap();

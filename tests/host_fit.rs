@@ -85,6 +85,36 @@ fn default_fit_with_the_bayes_head_equals_the_numpy_reference_byte_for_byte() {
 }
 
 #[test]
+fn objectness_feature_fit_equals_the_numpy_reference_byte_for_byte() {
+    // DESIGN §1.6's objectness feature (format version 4), written by the numpy fit:
+    //   python3 tools/mlmap_ref.py fit --objectness-feature examples/data/train.csv \
+    //       tests/golden/train_osf.mlmap
+    let golden = std::fs::read(repo("tests/golden/train_osf.mlmap")).unwrap();
+    assert_eq!(&golden[4..5], [4], "a version-4 file");
+    let mut params = FitParams::default();
+    if let Some(b) = params.bayes.as_mut() {
+        b.objectness = true;
+    }
+    let table = fit(&train(), &params).unwrap();
+    assert_eq!(table.to_vec().unwrap(), golden);
+    let set = TrainingSet::read(&train()).unwrap();
+    assert_eq!(set.fit(&params).unwrap(), table);
+    let bayes = table.bayes().unwrap();
+    assert_eq!(bayes.features(), 4);
+    assert_eq!(bayes.objectness_terms().len(), 22 * 4);
+    // Statistics do not hold the objectness: the feature needs the rows.
+    let mut stats = mlmap::host::fit::FitStats::new(&["car", "cyclist", "pedestrian"]);
+    train()
+        .for_each_row(|row| {
+            stats.push(&row);
+            Ok::<(), mlmap::host::fit::FitError>(())
+        })
+        .unwrap();
+    let err = stats.edges(&params).unwrap_err();
+    assert!(err.to_string().contains("objectness"), "{err}");
+}
+
+#[test]
 fn the_shipped_default_table_is_the_fit_of_the_shipped_training_data() {
     // tables/default.mlmap (embedded by build.rs unless MLMAP_TABLE says otherwise) is
     //   mlmap fit --train examples/data/train.csv --output tables/default.mlmap

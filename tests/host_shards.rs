@@ -129,7 +129,11 @@ fn params_strategy() -> impl Strategy<Value = FitParams> {
             } else {
                 UpperTail::Zero
             },
-            bayes: bayes.map(|bins| BayesParams { bins, lambda: 0.01 }),
+            bayes: bayes.map(|bins| BayesParams {
+                bins,
+                lambda: 0.01,
+                objectness: false,
+            }),
             ..FitParams::default()
         })
 }

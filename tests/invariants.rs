@@ -918,6 +918,7 @@ pub(crate) mod bayes {
                 rows: self.rows.clone(),
                 ranges: self.ranges.clone(),
                 terms,
+                objectness: None,
             }
         }
     }

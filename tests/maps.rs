@@ -14,10 +14,14 @@ use crate::support::GOLDEN_ABS_TOL;
 const SMALL_MAPS: &[u8] = include_bytes!("golden/layer/small_maps.mlmap");
 /// The small table without a Bayes head, with maps for ML and MAP.
 const SMALL_MAPS_NOBAYES: &[u8] = include_bytes!("golden/layer/small_maps_nobayes.mlmap");
+/// The small table with a Bayes head, the open head and the objectness feature (DESIGN
+/// §1.6), no map.
+const SMALL_OSF: &[u8] = include_bytes!("golden/layer/small_osf.mlmap");
 
 type Maps = Table<3, 4, 2, 4, 4, MAX_KNOTS>;
 type MapsNoBayes = Table<3, 4, 2, 0, 0, MAX_KNOTS>;
-type Bounded = BoundedTable<8, 8, 8, 8, 9, MAX_KNOTS>;
+type Osf = Table<3, 4, 2, 4, 4, 0, 1>;
+type Bounded = BoundedTable<8, 8, 8, 8, 9, MAX_KNOTS, 1>;
 
 const HEADS: [Head; 4] = [Head::Ml, Head::Map, Head::Bayes, Head::Open];
 
@@ -88,6 +92,14 @@ fn score_all(bytes: &[u8], head: Head, x: &[f32; 3], os: f32) -> Result<[f32; 3]
             Head::Bayes => t.bayes(x, os),
             Head::Open => t.open(x, os),
         }
+    } else if bytes == SMALL_OSF {
+        let t = Osf::from_bytes(bytes).unwrap();
+        match head {
+            Head::Ml => t.ml(x, os),
+            Head::Map => t.map(x, os),
+            Head::Bayes => t.bayes(x, os),
+            Head::Open => t.open(x, os),
+        }
     } else {
         let t = MapsNoBayes::from_bytes(bytes).unwrap();
         match head {
@@ -118,6 +130,7 @@ fn mapped_heads_match_the_numpy_reference() {
         let bytes = match g.table.as_str() {
             "small_maps" => SMALL_MAPS,
             "small_maps_nobayes" => SMALL_MAPS_NOBAYES,
+            "small_osf" => SMALL_OSF,
             other => panic!("unknown golden table {other}"),
         };
         let raw = mlmap::host::DynTable::from_bytes(bytes)
@@ -176,6 +189,7 @@ fn mapped_heads_match_the_numpy_reference() {
         }
     }
     assert!(compared >= 200, "{compared}");
+    assert!(rows.iter().filter(|g| g.table == "small_osf").count() >= 40);
     assert!(rows.iter().any(|g| g.error.is_some()));
     eprintln!("maps: {compared} head scores compared, worst error {worst:e}");
 }
@@ -207,8 +221,8 @@ fn version_four_bytes_round_trip() {
             Knot { x: 1.0, y: 1.0 }
         ]
     );
-    // Per map: a head code, a knot count and 8 bytes per knot; plus one record count
-    // and the open head's option byte.
+    // Per map: a head code, a knot count and 8 bytes per knot; plus one record count,
+    // the objectness feature's option byte and the open head's option byte.
     let without = mlmap::host::DynTable::from_bytes(SMALL_MAPS)
         .unwrap()
         .without_maps()
@@ -218,7 +232,7 @@ fn version_four_bytes_round_trip() {
         .iter()
         .map(|&h| t.recal_map(h).unwrap().knots().len())
         .sum();
-    assert_eq!(SMALL_MAPS.len(), without.len() + 2 + 4 * 2 + 8 * knots);
+    assert_eq!(SMALL_MAPS.len(), without.len() + 3 + 4 * 2 + 8 * knots);
 }
 
 #[test]
@@ -421,4 +435,37 @@ proptest! {
             }
         }
     }
+}
+
+/// The objectness feature (DESIGN §1.6): a table type without room refuses it, one that
+/// requires it refuses a table without; the bytes round-trip; the open head's unknown
+/// category has a flat share on the feature's axis too.
+#[test]
+fn objectness_feature_types_and_bytes() {
+    assert_eq!(
+        Table::<3, 4, 2, 4, 4>::from_bytes(SMALL_OSF),
+        Err(DecodeError::ObjectnessMismatch { found: true })
+    );
+    let open = include_bytes!("golden/layer/small_open.mlmap");
+    assert_eq!(
+        Osf::from_bytes(open),
+        Err(DecodeError::ObjectnessMismatch { found: false })
+    );
+    let t = Osf::from_bytes(SMALL_OSF).unwrap();
+    assert_eq!(SMALL_OSF[4], 4);
+    let mut buf = [0u8; Osf::MAX_ENCODED_LEN];
+    assert_eq!(t.to_slice(&mut buf).unwrap(), SMALL_OSF);
+    let d = mlmap::host::DynTable::from_bytes(SMALL_OSF).unwrap();
+    assert_eq!(d.to_vec().unwrap(), SMALL_OSF);
+    let b = d.bayes().unwrap();
+    assert_eq!(b.features(), 4);
+    let axis = b.objectness_axis().unwrap();
+    assert_eq!((axis.lo(), axis.hi(), axis.bins()), (-4.0, 4.0, 4));
+    // ln(eps) + (K + 1) ln(1/B + lambda), K = 3, B = 4, lambda = 0.01, eps = 0.05.
+    let want = (0.05f64).ln() + 4.0 * (0.25f64 + 0.01).ln();
+    let got = f64::from(t.open_params().unwrap().log_unknown());
+    assert!((got - want).abs() < 1e-5, "{got} vs {want}");
+    // Bounded storage with room for the feature reads tables with and without it.
+    assert!(Bounded::from_bytes(SMALL_OSF).is_ok());
+    assert!(Bounded::from_bytes(open).is_ok());
 }

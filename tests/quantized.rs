@@ -37,8 +37,15 @@ fn open_bits(o: Option<OpenParams>) -> Option<[u32; 3]> {
 }
 
 /// The quantized section of `t` for `params`.
-fn section<const BM: usize, const BP: usize, const BB: usize, const C: usize, const N: usize>(
-    t: &Table<3, BM, BP, BB, C, N>,
+fn section<
+    const BM: usize,
+    const BP: usize,
+    const BB: usize,
+    const C: usize,
+    const N: usize,
+    const F: usize,
+>(
+    t: &Table<3, BM, BP, BB, C, N, F>,
     params: &QParams<'_>,
 ) -> Vec<u8> {
     let n = quantized_len(&t.view(), params).expect("valid parameters");
@@ -61,9 +68,10 @@ fn agree<
     const BB: usize,
     const C: usize,
     const N: usize,
+    const F: usize,
     Q: Code + Copy,
 >(
-    t: &Table<3, BM, BP, BB, C, N>,
+    t: &Table<3, BM, BP, BB, C, N, F>,
     q: &QTable<'_, 3, Q>,
     (scales, zps): ([f32; 3], [i32; 3]),
     all: &[Q],
@@ -155,8 +163,9 @@ fn int8_everywhere<
     const BB: usize,
     const C: usize,
     const N: usize,
+    const F: usize,
 >(
-    t: &Table<3, BM, BP, BB, C, N>,
+    t: &Table<3, BM, BP, BB, C, N, F>,
 ) {
     let all: Vec<i8> = (i8::MIN..=i8::MAX).collect();
     let others = [-128i8, -40, -1, 0, 37, 127];
@@ -176,7 +185,7 @@ fn int8_everywhere<
         let maps = [Head::Ml, Head::Map, Head::Bayes, Head::Open]
             .iter()
             .any(|&h| t.recal_map(h).is_some());
-        let version = match (maps, t.open_params().is_some()) {
+        let version = match (maps || F > 0, t.open_params().is_some()) {
             (true, _) => 3,
             (false, true) => 2,
             (false, false) => 1,
@@ -216,6 +225,34 @@ fn int8_maps_equal_f32_layer_for_every_code() {
     ))
     .unwrap();
     int8_everywhere(&t);
+}
+
+/// The objectness feature (DESIGN §1.6) in the section (version 3, flag bit 2): the
+/// quantized Bayes and open heads look up the objectness logit's bin at run time, bit
+/// for bit as the f32 heads.
+#[test]
+fn int8_objectness_feature_equals_f32_layer_for_every_code() {
+    let t = Table::<3, 4, 2, 4, 4, 0, 1>::from_bytes(include_bytes!(
+        "golden/layer/small_osf.mlmap"
+    ))
+    .unwrap();
+    int8_everywhere(&t);
+    // Every objectness bin, both ends and the clamp.
+    let (scales, zps) = ([0.05f32; 3], [0i32; 3]);
+    let p = QParams {
+        bits: 8,
+        scales: &scales,
+        zero_points: &zps,
+        bayes: true,
+    };
+    let bytes = section(&t, &p);
+    let q = QTable::<3, i8>::from_bytes(&bytes).unwrap();
+    let codes = [60i8, -30, -70];
+    let x: [f32; 3] = std::array::from_fn(|i| dequantize(i32::from(codes[i]), 0.05, 0));
+    for os in [0.0f32, 1e-30, 0.02, 0.1, 0.3, 0.5, 0.75, 0.9, 0.999, 1.0] {
+        assert_eq!(bits(q.bayes(&codes, os)), bits(t.bayes(&x, os)), "{os}");
+        assert_eq!(bits(q.open(&codes, os)), bits(t.open(&x, os)), "{os}");
+    }
 }
 
 /// A section built without the Bayes head from a table with maps on every head keeps the

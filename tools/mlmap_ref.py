@@ -7,6 +7,7 @@ so agreement between the two is evidence for both. Used to write golden values
 
     python3 tools/mlmap_ref.py fit examples/data/train.csv OUT.mlmap   # every head (version 3)
     python3 tools/mlmap_ref.py fit --no-bayes examples/data/train.csv OUT.mlmap  # version 1
+    python3 tools/mlmap_ref.py fit --objectness-feature examples/data/train.csv OUT.mlmap  # v4
     python3 tools/mlmap_ref.py goldens tests/golden/layer              # layer goldens
 
 `fit` uses the defaults of `mlmap fit`: linspace edges, 22 ML bins (lambda 0.0055), 17 MAP
@@ -84,13 +85,14 @@ def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None
     bmap = len(classes[0]["map_freqs"])
     b = bytearray(MAGIC)
     version = VERSION_1 if bayes is None else (VERSION_2 if open_ is None else VERSION_3)
-    if maps:
+    v4 = bool(maps) or (bayes is not None and bayes.get("objectness") is not None)
+    if v4:
         version = VERSION_4
     header = [version, k, bml, bmap]
     if bayes is not None:
         cats = len(bayes["rows"])
         header += [len(bayes["terms"]) // (cats * k), cats]
-    elif maps:
+    elif v4:
         header += [0, 0]
     for v in header:
         b += varint(v)
@@ -113,11 +115,21 @@ def encode(classes, lambda_ml, lambda_map, edge_mode=0, upper_tail=0, bayes=None
         cats, k = len(bayes["rows"]), len(bayes["ranges"])
         lm = np.asarray(bayes["terms"], dtype=np.float32).reshape(cats, k, -1).transpose(1, 2, 0)
         b += varint(lm.size) + b"".join(f32(v) for v in lm.ravel())
-        if maps:
+        if v4:
+            feat = bayes.get("objectness")
+            if feat is None:
+                b += b"\x00"
+            else:
+                # Held category-major (c, b); written bin-major (b, c).
+                lo, hi, fterms = feat
+                fm = np.asarray(fterms, dtype=np.float32).reshape(cats, -1).T
+                b += b"\x01" + f32(lo) + f32(hi) + varint(fm.size)
+                b += b"".join(f32(v) for v in fm.ravel())
             b += b"\x00" if open_ is None else b"\x01" + f32(open_[0]) + f32(open_[1])
         elif open_ is not None:
             b += f32(open_[0]) + f32(open_[1])
-    if maps:
+    if v4:
+        maps = maps or {}
         heads = [h for h in MAP_HEADS if h in maps]
         b += varint(len(heads))
         for h in heads:
@@ -162,7 +174,7 @@ def read_csv(path):
     return names, labels, x, os_
 
 
-def fit_bayes(names, labels, x, bins, lam):
+def fit_bayes(names, labels, x, bins, lam, os_=None):
     """The Bayes head (DESIGN.md section 1.6) of the labelled rows, as `encode` takes it.
 
     Categories: the classes, then `background` when some row has that label (rows without
@@ -186,13 +198,30 @@ def fit_bayes(names, labels, x, bins, lam):
             counts, _ = np.histogram(v[:, j], bins=edges_f32(lo, hi, bins))
             assert counts.sum() == n
             terms += [np.float32(np.log(c / n + lam64)) for c in counts]
-    return dict(**{"lambda": lam}, rows=rows, ranges=ranges, terms=terms)
+    head = dict(**{"lambda": lam}, rows=rows, ranges=ranges, terms=terms)
+    if os_ is not None:
+        # The objectness feature: linspace bins over the finite objectness logits of the
+        # labelled rows; every row counted at its logit clamped into the axis.
+        z = np.array([objectness_logit(o) for o in os_], dtype=np.float64).astype(np.float32)
+        finite = z[labelled & np.isfinite(z)]
+        if len(finite) == 0:
+            raise ValueError("every labelled row has an objectness of 0 or 1")
+        lo, hi = linspace_range(finite)
+        edges = edges_f32(lo, hi, bins)
+        fterms = []
+        for cat in cats:
+            v = np.clip(z[labels == cat], lo, hi)
+            counts, _ = np.histogram(v, bins=edges)
+            assert counts.sum() == len(v)
+            fterms += [np.float32(np.log(c / len(v) + lam64)) for c in counts]
+        head["objectness"] = (lo, hi, fterms)
+    return head
 
 
 def fit(path, bins_ml=22, bins_map=17, lambda_ml=0.0055, lambda_map=0.00012,
-        bins_bayes=22, lambda_bayes=1e-3, bayes=True):
+        bins_bayes=22, lambda_bayes=1e-3, bayes=True, objectness=False):
     """The table `mlmap fit` writes for the CSV file at `path`, as `encode`'s arguments."""
-    names, labels, x, _ = read_csv(path)
+    names, labels, x, os_all = read_csv(path)
     classes = []
     for c, name in enumerate(names):
         v = x[[lab == name for lab in labels], c]
@@ -202,7 +231,8 @@ def fit(path, bins_ml=22, bins_map=17, lambda_ml=0.0055, lambda_map=0.00012,
         classes.append(dict(name=name, rows=len(v), mean=float(np.mean(v)), var=var,
                             ml_lo=ml_lo, ml_hi=ml_hi, ml_freqs=ml_f,
                             map_lo=map_lo, map_hi=map_hi, map_freqs=map_f))
-    head = fit_bayes(names, labels, x, bins_bayes, lambda_bayes) if bayes else None
+    head = (fit_bayes(names, labels, x, bins_bayes, lambda_bayes,
+                      os_all if objectness else None) if bayes else None)
     return classes, lambda_ml, lambda_map, head
 
 
@@ -290,12 +320,24 @@ def decode(data):
         if has_bayes:
             flag = r.take(1)[0]
             if flag not in (0, 1):
+                raise ValueError("objectness option")
+            if flag == 1:
+                lo, hi = r.f32(), r.f32()
+                fterms = r.f32s()
+                if len(fterms) != bins_bayes * cats:
+                    raise ValueError("objectness shape")
+                # Stored bin-major (b, c); held category-major (c, b).
+                fterms = list(np.asarray(fterms, dtype=np.float32).reshape(bins_bayes, cats)
+                              .T.ravel())
+                t["bayes"]["objectness"] = (lo, hi, fterms)
+            flag = r.take(1)[0]
+            if flag not in (0, 1):
                 raise ValueError("open option")
             if flag == 1:
                 t["open"] = (r.f32(), r.f32())
         n = r.varint()
-        if n == 0:
-            raise ValueError("a version-4 table without maps")
+        if n == 0 and not (t["bayes"] or {}).get("objectness"):
+            raise ValueError("a version-4 table without maps or objectness feature")
         last = -1
         for _ in range(n):
             code = r.take(1)[0]
@@ -376,8 +418,17 @@ def axis_bin(x, lo, hi, nbins):
     return int(np.argmax(counts))
 
 
-def bayes_log_scores(t, x):
-    """The log-scores l[c] of the Bayes categories (DESIGN.md section 1.6), float64."""
+def objectness_logit(os_):
+    """ln(OS) - ln(1 - OS) of the float32 objectness, in float64 (-inf at 0, +inf at 1)."""
+    o = float(np.float32(os_))
+    with np.errstate(divide="ignore"):
+        return float(np.log(np.float64(o)) - np.log(np.float64(1.0 - o)))
+
+
+def bayes_log_scores(t, x, os_=1.0):
+    """The log-scores l[c] of the Bayes categories (DESIGN.md section 1.6), float64; with
+    the objectness feature, plus the row of the objectness logit's bin (the logit clamped
+    into the feature's axis)."""
     b = t["bayes"]
     k, nb = t["k"], b["bins"]
     rows = np.asarray(b["rows"], dtype=np.float64)
@@ -387,12 +438,18 @@ def bayes_log_scores(t, x):
     for j, (v, (lo, hi)) in enumerate(zip(x, b["ranges"])):
         i = axis_bin(v, lo, hi, nb)
         l = l + (terms[:, j, i] if i is not None else log_lambda)
+    feat = b.get("objectness")
+    if feat is not None:
+        lo, hi, fterms = feat
+        z = min(max(objectness_logit(os_), float(lo)), float(hi))
+        i = axis_bin(z, lo, hi, nb)
+        l = l + np.asarray(fterms, dtype=np.float64).reshape(len(rows), nb)[:, i]
     return l
 
 
-def bayes_posterior(t, x):
+def bayes_posterior(t, x, os_=1.0):
     """The posterior p over the Bayes categories (DESIGN.md section 1.6), float64."""
-    l = bayes_log_scores(t, x)
+    l = bayes_log_scores(t, x, os_)
     e = np.exp(l - l.max())
     return e / e.sum()
 
@@ -409,20 +466,22 @@ def temperature_softmax(x, temp):
     return e / e.sum()
 
 
-def open_known(t, x):
+def open_known(t, x, os_=1.0):
     """q: the probability that the detection is of a known class (DESIGN.md section 1.8),
-    the K classes' share of the posterior over the categories and the unknown one."""
+    the K classes' share of the posterior over the categories and the unknown one (its
+    flat share on every axis: the K logits', and the objectness feature's when present)."""
     b = t["bayes"]
     temp, eps = t["open"]
     k = t["k"]
-    l = bayes_log_scores(t, x)
+    axes = k + (1 if b.get("objectness") is not None else 0)
+    l = bayes_log_scores(t, x, os_)
     m = l.max()
     e = np.exp(l - m)
     if eps == 0.0:
         unknown = 0.0
     else:
         lam = np.float64(b["lambda"])
-        log_u = np.log(np.float64(eps)) + k * np.log(1.0 / b["bins"] + lam)
+        log_u = np.log(np.float64(eps)) + axes * np.log(1.0 / b["bins"] + lam)
         unknown = np.exp(log_u - m)
     return e[:k].sum() / (e.sum() + unknown)
 
@@ -430,13 +489,13 @@ def open_known(t, x):
 def open_(t, x, os_):
     """Open-head class scores: OS * q * softmax(x / T)."""
     check(x, os_)
-    return os_ * open_known(t, x) * temperature_softmax(x, t["open"][0])
+    return os_ * open_known(t, x, os_) * temperature_softmax(x, t["open"][0])
 
 
 def bayes(t, x, os_):
     """Bayes class scores: OS * p[c] for the K classes (the background share is dropped)."""
     check(x, os_)
-    return os_ * bayes_posterior(t, x)[:t["k"]]
+    return os_ * bayes_posterior(t, x, os_)[:t["k"]]
 
 
 def recal_g(knots, top):
@@ -611,6 +670,41 @@ SMALL_MAPS = {
               (1.0, 0.9375)],
     "open": [(0.0, 0.03125), (0.5, 0.25), (1.0, 1.0)],
 }
+# The objectness feature on the small Bayes head with background: an axis over the
+# objectness logit from -4 to 4 (edges -4, -2, 0, 2, 4) and per category frequencies
+# (category-major, as bayes_head holds its terms), for SMALL_BAYES's lambda.
+SMALL_OSF_FREQS = {
+    "car": [0.0, 0.1, 0.3, 0.6],
+    "cyclist": [0.1, 0.2, 0.3, 0.4],
+    "pedestrian": [0.05, 0.15, 0.4, 0.4],
+    "background": [0.5, 0.3, 0.15, 0.05],
+}
+
+
+def small_osf():
+    """SMALL_BAYES with the objectness feature."""
+    head = dict(SMALL_BAYES)
+    lam64 = float(np.float32(head["lambda"]))
+    fterms = [np.float32(np.log(h + lam64)) for c in SMALL_OSF_FREQS for h in SMALL_OSF_FREQS[c]]
+    head["objectness"] = (-4.0, 4.0, fterms)
+    return head
+
+
+# Objectness values aimed at the feature's bins (their logits away from the edges),
+# both ends, and the clamp.
+OSF_CASES = [
+    ("osf objectness 0.1 (bin 0)", [3.0, 0.5, -3.5], 0.1),
+    ("osf objectness 0.3 (bin 1)", [3.0, 0.5, -3.5], 0.3),
+    ("osf objectness 0.5 (bin 2 from its first edge 0)", [3.0, 0.5, -3.5], 0.5),
+    ("osf objectness 0.75 (bin 2)", [-3.0, -1.5, -0.5], 0.75),
+    ("osf objectness 0.9 (bin 3)", [1.0, 1.5, -2.5], 0.9),
+    ("osf objectness 0.999 (clamped to the last bin)", [1.0, 1.5, -2.5], 0.999),
+    ("osf objectness 1 (+inf so the last bin)", [0.5, 0.5, 0.5], 1.0),
+    ("osf objectness 0 (-inf so the first bin)", [0.5, 0.5, 0.5], 0.0),
+    ("osf objectness 0.02 (clamped to the first bin)", [10.0, 10.0, 10.0], 0.02),
+    ("osf every logit outside", [-10.0, 5.0, 1e30], 0.6),
+]
+
 SMALL_MAPS_NOBAYES = {
     "ml": [(0.0, 0.2), (1.0, 0.8)],
     "map": [(0.0, 0.015625), (0.3, 0.6), (1.0, 0.7)],
@@ -689,7 +783,7 @@ def open_rows(name, t, cases):
         x = [float(np.float32(v)) for v in x]
         os_ = float(np.float32(os_))
         try:
-            scores = list(open_(t, x, os_)) + [open_known(t, x)]
+            scores = list(open_(t, x, os_)) + [open_known(t, x, os_)]
             err = ""
         except InferenceError as e:
             scores, err = [None] * (t["k"] + 1), str(e)
@@ -741,7 +835,8 @@ def write_maps_csv(path, k, rows, regenerate):
         head += ["%s%d" % (h, i) for i in range(k)]
     head += ["error"]
     with open(path, "w") as fh:
-        fh.write("# Expected scores of every head after its recalibration map (float64) from "
+        fh.write("# Expected scores of every head, after its recalibration map when the table "
+                 "has one, of the tables with maps or the objectness feature (float64) from "
                  "tools/mlmap_ref.py, numpy %s.\n" % np.__version__)
         fh.write("# Regenerate: %s\n" % regenerate)
         fh.write("# A head's columns are empty when the table lacks it.\n")
@@ -819,10 +914,12 @@ def goldens(outdir):
     maps_all = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=SMALL_BAYES,
                       open_=SMALL_OPEN, maps=SMALL_MAPS)
     maps_nobayes = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, maps=SMALL_MAPS_NOBAYES)
+    # The objectness feature on the open table with background (version 4, no map).
+    osf = encode(SMALL, SMALL_LAMBDA_ML, SMALL_LAMBDA_MAP, bayes=small_osf(), open_=SMALL_OPEN)
     files = (("small", small), ("small_clamp", clamp), ("small_bayes", with_bg),
              ("small_bayes_nobg", no_bg), ("small_open", open_bg),
              ("small_open_nobg", open_nobg), ("small_maps", maps_all),
-             ("small_maps_nobayes", maps_nobayes))
+             ("small_maps_nobayes", maps_nobayes), ("small_osf", osf))
     rows, open_table_rows, map_table_rows = [], [], []
     for name, data in files:
         with open(os.path.join(outdir, name + ".mlmap"), "wb") as fh:
@@ -831,7 +928,9 @@ def goldens(outdir):
         assert encode(t["classes"], t["lambda_ml"], t["lambda_map"], t["edge_mode"],
                       t["upper_tail"], t["bayes"], t["open"], t["maps"] or None) == data
         cases = SMALL_CASES + (BAYES_CASES if t["bayes"] is not None else [])
-        if t["maps"]:
+        if t["bayes"] is not None and t["bayes"].get("objectness") is not None:
+            map_table_rows += maps_rows(name, t, cases + OPEN_CASES + OSF_CASES)
+        elif t["maps"]:
             map_table_rows += maps_rows(name, t, cases + OPEN_CASES + MAP_CASES)
         elif t["open"] is not None:
             open_table_rows += open_rows(name, t, cases + OPEN_CASES)
@@ -853,8 +952,10 @@ def goldens(outdir):
 
 def main():
     args = sys.argv[1:]
-    if len(args) in (3, 4) and args[0] == "fit" and args[1:-2] in ([], ["--no-bayes"]):
-        classes, lml, lmap, head = fit(args[-2], bayes=len(args) == 3)
+    if (len(args) in (3, 4) and args[0] == "fit"
+            and args[1:-2] in ([], ["--no-bayes"], ["--objectness-feature"])):
+        classes, lml, lmap, head = fit(args[-2], bayes=args[1:-2] != ["--no-bayes"],
+                                       objectness=args[1:-2] == ["--objectness-feature"])
         # An untuned open head (temperature 1, epsilon 0) comes with the Bayes head.
         open_ = None if head is None else UNTUNED_OPEN
         with open(args[-1], "wb") as fh:

@@ -15,6 +15,11 @@
 //! s_i  = OS * p[i]                                   for the K classes only
 //! ```
 //!
+//! With the objectness feature (`fit --objectness-feature`, §1.6) one more axis, over
+//! the objectness logit `z = ln(OS) - ln(1 - OS)` clamped into the axis, adds its row
+//! of terms after the K logits' (so `OS = 0` and `OS = 1` fall in the first and last
+//! bin).
+//!
 //! So inference is `K * |C|` lookups and additions and one softmax over `|C|` values.
 //! The background share is not a class score: the K scores sum to `OS` without a
 //! background category and to at most `OS` with one. A detection whose every logit is
@@ -45,6 +50,17 @@ pub struct BayesView<'a> {
     pub(crate) log_lambda: f32,
     /// The open head's parameters (§1.8), when the table has them (format version 3).
     pub(crate) open: Option<OpenParams>,
+    /// The objectness feature: its axis over the objectness logit and its `B * C`
+    /// terms (bin-major, then category), when the table has it (format version 4).
+    pub(crate) objectness: Option<(Axis, &'a [f32])>,
+}
+
+/// The objectness logit `ln(OS) - ln(1 - OS)` of the objectness feature (DESIGN §1.6),
+/// in `f32` with libm's `logf`: `-inf` for `OS = 0`, `+inf` for `OS = 1`. The fit bins
+/// training rows with this very function.
+#[inline]
+pub fn objectness_logit(objectness: f32) -> f32 {
+    math::ln(objectness) - math::ln(1.0 - objectness)
 }
 
 impl<'a> BayesView<'a> {
@@ -130,6 +146,26 @@ impl<'a> BayesView<'a> {
         self.axes
     }
 
+    /// The objectness feature's axis, over the objectness logit, when the table has it.
+    #[inline]
+    pub fn objectness_axis(&self) -> Option<Axis> {
+        self.objectness.map(|(a, _)| a)
+    }
+
+    /// The objectness feature's `B * C` terms (bin-major, then category; empty without
+    /// the feature).
+    #[inline]
+    pub fn objectness_terms(&self) -> &'a [f32] {
+        self.objectness.map_or(&[], |(_, t)| t)
+    }
+
+    /// Number of axes a detection adds terms from: K, plus 1 with the objectness
+    /// feature (the open head's unknown category has a flat share on each).
+    #[inline]
+    pub fn features(&self) -> usize {
+        self.logits() + usize::from(self.objectness.is_some())
+    }
+
     /// Scores of one detection into `out` (length K); `scratch` holds one value per
     /// category. Inputs must already be checked (no NaN logit, objectness in `[0, 1]`).
     #[inline]
@@ -143,16 +179,22 @@ impl<'a> BayesView<'a> {
         if out.len() != self.logits() {
             return Err(InferError::Length);
         }
-        self.log_scores_into(logits, scratch)?;
+        self.log_scores_into(logits, objectness, scratch)?;
         softmax::<M>(scratch, objectness, out);
         Ok(())
     }
 
     /// The log-scores `l[c] = ln pi[c] + sum_j t[c][j][bin_j(x_j)]` of one detection
-    /// into `l` (one per category); shared by this head and the open head (§1.8).
-    /// Inlined into each head, so that a fixed-size table's lengths are constants there.
+    /// into `l` (one per category), plus the objectness feature's term when the table
+    /// has it; shared by this head and the open head (§1.8). Inlined into each head, so
+    /// that a fixed-size table's lengths are constants there.
     #[inline(always)]
-    pub(crate) fn log_scores_into(&self, logits: &[f32], l: &mut [f32]) -> Result<(), InferError> {
+    pub(crate) fn log_scores_into(
+        &self,
+        logits: &[f32],
+        objectness: f32,
+        l: &mut [f32],
+    ) -> Result<(), InferError> {
         let b = self.bins();
         if logits.len() != self.logits() || l.len() != self.categories() {
             return Err(InferError::Length);
@@ -183,7 +225,27 @@ impl<'a> BayesView<'a> {
             }
             offset += b;
         }
+        if let Some((axis, terms)) = &self.objectness {
+            add_objectness_row(axis, terms, objectness, l);
+        }
         Ok(())
+    }
+}
+
+/// Adds the objectness feature's row of terms for `objectness` to the log-scores `l`:
+/// the bin of the objectness logit clamped into `axis` (every objectness in `[0, 1]`
+/// has one). Shared by [`BayesView`] and the quantized table.
+#[inline(always)]
+pub(crate) fn add_objectness_row(axis: &Axis, terms: &[f32], objectness: f32, l: &mut [f32]) {
+    let cats = l.len();
+    let z = objectness_logit(objectness).clamp(axis.lo, axis.hi);
+    let row = axis
+        .bin(z)
+        .and_then(|bin| terms.get(bin * cats..(bin + 1) * cats));
+    if let Some(row) = row {
+        for (l, &t) in l.iter_mut().zip(row) {
+            *l += t;
+        }
     }
 }
 
@@ -222,6 +284,7 @@ const TERM_TOLERANCE: f32 = 2.0 * 80.0 * f32::EPSILON;
 /// Checks a Bayes head's stored fields (every table invariant of §1.6) and computes the
 /// derived ones: fills `axes[j]`'s widths (from their `lo`, `hi` as stored), writes
 /// `log_prior` and returns `ln(lambda)`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn validate(
     k: usize,
     bins: usize,
@@ -230,6 +293,7 @@ pub(crate) fn validate(
     terms: &[f32],
     rows: &[u64],
     log_prior: &mut [f32],
+    objectness: Option<(&mut Axis, &[f32])>,
 ) -> Result<f32, TableError> {
     let head = Head::Bayes;
     if !(lambda > 0.0 && lambda <= MAX_LAMBDA_BAYES) {
@@ -273,23 +337,49 @@ pub(crate) fn validate(
             .skip(c)
             .step_by(categories.max(1))
             .take(bins);
-        let class = u16::try_from(c).unwrap_or(u16::MAX);
-        let mut sum = 0.0f32;
-        for &t in hist {
-            if !t.is_finite() {
-                return Err(TableError::Frequencies { head, class });
-            }
-            let h = math::exp(t) - lambda;
-            if !(h >= -TERM_TOLERANCE) {
-                return Err(TableError::Frequencies { head, class });
-            }
-            sum += h;
+        check_histogram(hist, lambda, bins, c)?;
+    }
+    // The objectness feature: its axis (named as logit K in errors) and, per category, a
+    // histogram of the same rule; its terms are bin-major, then category.
+    if let Some((axis, terms)) = objectness {
+        let class = u16::try_from(k).unwrap_or(u16::MAX);
+        *axis = Axis::new(axis.lo, axis.hi, bins).map_err(|_| TableError::Edges { head, class })?;
+        if Some(terms.len()) != bins.checked_mul(categories) {
+            return Err(TableError::BayesShape);
         }
-        // The rounding of each term adds up over the bins.
-        let tolerance = FREQUENCY_SUM_TOLERANCE + bins as f32 * TERM_TOLERANCE;
-        if !((sum - 1.0).abs() <= tolerance) {
-            return Err(TableError::Frequencies { head, class });
+        for c in 0..categories {
+            let hist = terms.iter().skip(c).step_by(categories.max(1)).take(bins);
+            check_histogram(hist, lambda, bins, c)?;
         }
     }
     Ok(log_lambda)
+}
+
+/// Checks one category's histogram of stored terms `ln(h + lambda)`: every term finite,
+/// `h >= 0` and `sum h = 1` within the tolerances.
+fn check_histogram<'t>(
+    terms: impl Iterator<Item = &'t f32>,
+    lambda: f32,
+    bins: usize,
+    category: usize,
+) -> Result<(), TableError> {
+    let head = Head::Bayes;
+    let class = u16::try_from(category).unwrap_or(u16::MAX);
+    let mut sum = 0.0f32;
+    for &t in terms {
+        if !t.is_finite() {
+            return Err(TableError::Frequencies { head, class });
+        }
+        let h = math::exp(t) - lambda;
+        if !(h >= -TERM_TOLERANCE) {
+            return Err(TableError::Frequencies { head, class });
+        }
+        sum += h;
+    }
+    // The rounding of each term adds up over the bins.
+    let tolerance = FREQUENCY_SUM_TOLERANCE + bins as f32 * TERM_TOLERANCE;
+    if !((sum - 1.0).abs() <= tolerance) {
+        return Err(TableError::Frequencies { head, class });
+    }
+    Ok(())
 }

@@ -144,6 +144,7 @@ pub struct BoundedTable<
     const B_BAYES: usize,
     const C: usize,
     const N: usize = 0,
+    const F: usize = 0,
 > {
     /// Classes in use; 0 for an empty table.
     k: usize,
@@ -172,6 +173,12 @@ pub struct BoundedTable<
     recal: [[Knot; N]; 4],
     /// Knots in use in each of `recal` (0: no map).
     recal_len: [u8; 4],
+    /// Room for the objectness feature (DESIGN §1.6) when `F = 1`: its axis and its
+    /// terms (the first `bayes_categories * bayes_bins` in use).
+    bayes_os_axis: [Axis; F],
+    bayes_os_terms: [[[f32; B_BAYES]; C]; F],
+    /// Whether the table in use has the feature.
+    bayes_has_os: bool,
 }
 
 impl<
@@ -181,7 +188,8 @@ impl<
         const B_BAYES: usize,
         const C: usize,
         const N: usize,
-    > BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N>
+        const F: usize,
+    > BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N, F>
 {
     const SHAPE_OK: () = assert!(
         K >= 2
@@ -193,7 +201,8 @@ impl<
             && B_BAYES <= u16::MAX as usize
             && C <= u16::MAX as usize
             && ((B_BAYES == 0) == (C == 0))
-            && N <= MAX_KNOTS,
+            && N <= MAX_KNOTS
+            && F <= 1,
         "a BoundedTable holds up to 2..65535 classes and 1..=65535 bins per head; \
          B_BAYES and C are both 0 (no Bayes head) or both positive; at most MAX_KNOTS \
          knots per map"
@@ -208,7 +217,7 @@ impl<
     pub const MAX_BAYES_SHAPE: (u16, u16) = (B_BAYES as u16, C as u16);
 
     /// Largest number of bytes the encoding of a table of this type takes.
-    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C, N);
+    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C, N, F);
 
     /// An empty table (all zeros).
     pub const fn new() -> Self {
@@ -243,6 +252,9 @@ impl<
             bayes_open: None,
             recal: [[Knot::ZERO; N]; 4],
             recal_len: [0; 4],
+            bayes_os_axis: [Axis::ZERO; F],
+            bayes_os_terms: [[[0.0; B_BAYES]; C]; F],
+            bayes_has_os: false,
         }
     }
 
@@ -291,6 +303,7 @@ impl<
         self.bayes_categories = 0;
         self.bayes_terms_len = 0;
         self.recal_len = [0; 4];
+        self.bayes_has_os = false;
     }
 
     /// Whether the table holds no table.
@@ -322,6 +335,15 @@ impl<
                 lambda: self.bayes_lambda,
                 log_lambda: self.bayes_log_lambda,
                 open: self.bayes_open,
+                objectness: if self.bayes_has_os {
+                    let n = c.checked_mul(self.bayes_bins)?;
+                    Some((
+                        *self.bayes_os_axis.first()?,
+                        self.bayes_os_terms.as_flattened().as_flattened().get(..n)?,
+                    ))
+                } else {
+                    None
+                },
             })
         } else {
             None
@@ -399,6 +421,7 @@ impl<
         let mut raw_names = [""; K];
         let mut lens = [(0, 0); K];
         let [r0, r1, r2, r3] = &mut self.recal;
+        let mut has_os = false;
         let knots = Slots {
             names: self.names.get_mut(..k).ok_or(malformed)?,
             raw_names: raw_names.get_mut(..k).ok_or(malformed)?,
@@ -425,6 +448,10 @@ impl<
                     lambda: &mut self.bayes_lambda,
                     log_lambda: &mut self.bayes_log_lambda,
                     open: &mut self.bayes_open,
+                    objectness_axis: &mut self.bayes_os_axis,
+                    objectness_terms: self.bayes_os_terms.as_flattened_mut().as_flattened_mut(),
+                    objectness_required: false,
+                    has_objectness: &mut has_os,
                 })
             } else {
                 None
@@ -439,6 +466,7 @@ impl<
             // At most MAX_KNOTS (checked by the decoder).
             *len = u8::try_from(n).unwrap_or(0);
         }
+        self.bayes_has_os = has_os;
         (self.k, self.bayes_bins, self.bayes_categories) = (k, bins_bayes, categories);
         self.bayes_terms_len = terms;
         let view = self.view().ok_or(malformed)?;
@@ -453,7 +481,8 @@ impl<
         const B_BAYES: usize,
         const C: usize,
         const N: usize,
-    > Default for BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N>
+        const F: usize,
+    > Default for BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N, F>
 {
     fn default() -> Self {
         Self::new()

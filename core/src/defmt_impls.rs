@@ -126,6 +126,7 @@ impl Format for DecodeError {
                 "MapCapacity({} head: {} knots, room for {})",
                 head, found, capacity
             ),
+            Self::ObjectnessMismatch { found } => write!(f, "ObjectnessMismatch(found {})", found),
             Self::Malformed => write!(f, "Malformed"),
             Self::Invalid(e) => write!(f, "Invalid({})", e),
         }
@@ -226,7 +227,8 @@ impl<
         const B_BAYES: usize,
         const C: usize,
         const N: usize,
-    > Format for Table<K, B_ML, B_MAP, B_BAYES, C, N>
+        const F: usize,
+    > Format for Table<K, B_ML, B_MAP, B_BAYES, C, N, F>
 {
     fn format(&self, f: Formatter<'_>) {
         write!(

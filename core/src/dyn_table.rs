@@ -45,6 +45,8 @@ struct DynBayes {
     lambda: f32,
     log_lambda: f32,
     open: Option<OpenParams>,
+    /// The objectness feature's axis and terms (bin-major, then category).
+    objectness: Option<(Axis, Vec<f32>)>,
 }
 
 /// A fitted Bayes head before validation (docs/DESIGN.md §1.6), for
@@ -59,6 +61,10 @@ pub struct BayesSpec {
     pub ranges: Vec<(f32, f32)>,
     /// `ln(h + lambda)` per logit, bin and category, logit-major (see [`BayesView`]).
     pub terms: Vec<f32>,
+    /// The objectness feature (DESIGN §1.6), when fitted: the first and last edge of
+    /// its axis over the objectness logit, and its `ln(h + lambda)` per bin and
+    /// category (bin-major).
+    pub objectness: Option<((f32, f32), Vec<f32>)>,
 }
 
 impl DynTable {
@@ -126,6 +132,16 @@ impl DynTable {
             })
             .collect();
         let mut log_prior = vec![0.0; categories];
+        let mut objectness = spec.objectness.map(|((lo, hi), terms)| {
+            (
+                Axis {
+                    lo,
+                    hi,
+                    ..Axis::ZERO
+                },
+                terms,
+            )
+        });
         let log_lambda = bayes::validate(
             k,
             bins,
@@ -134,7 +150,12 @@ impl DynTable {
             &spec.terms,
             &spec.rows,
             &mut log_prior,
+            objectness.as_mut().map(|(a, t)| (a, t.as_slice())),
         )?;
+        if objectness.is_some() {
+            // Format version 4 holds only names of the rule of DESIGN §6.15.
+            self.check_names()?;
+        }
         self.bayes = Some(DynBayes {
             axes,
             terms: spec.terms,
@@ -143,6 +164,7 @@ impl DynTable {
             lambda: spec.lambda,
             log_lambda,
             open: None,
+            objectness,
         });
         Ok(self)
     }
@@ -234,7 +256,14 @@ impl DynTable {
         let k = self.k();
         let b = self.bayes.as_mut().ok_or(TableError::BayesShape)?;
         let bins = b.axes.first().map_or(0, Axis::bins);
-        b.open = Some(OpenParams::new(temperature, epsilon, k, bins, b.lambda)?);
+        let features = k + usize::from(b.objectness.is_some());
+        b.open = Some(OpenParams::new(
+            temperature,
+            epsilon,
+            features,
+            bins,
+            b.lambda,
+        )?);
         Ok(self)
     }
 
@@ -292,9 +321,11 @@ impl DynTable {
                 lambda: 0.0,
                 log_lambda: 0.0,
                 open: None,
+                objectness: Some((Axis::ZERO, vec![0.0; categories * bins_bayes])),
             }),
             maps: core::array::from_fn(|_| vec![Knot::ZERO; MAX_KNOTS]),
         };
+        let mut has_objectness = false;
         let mut raw_names = vec![""; k];
         let mut lens = vec![(0, 0); k];
         let [r0, r1, r2, r3] = &mut t.maps;
@@ -307,20 +338,35 @@ impl DynTable {
             ml: &mut t.ml,
             map: &mut t.map,
             settings: &mut t.settings,
-            bayes: t.bayes.as_mut().map(|b| BayesStorage {
-                axes: &mut b.axes,
-                terms: &mut b.terms,
-                rows: &mut b.rows,
-                log_prior: &mut b.log_prior,
-                lambda: &mut b.lambda,
-                log_lambda: &mut b.log_lambda,
-                open: &mut b.open,
+            bayes: t.bayes.as_mut().map(|b| {
+                let (axis, terms) = match &mut b.objectness {
+                    Some((a, t)) => (core::slice::from_mut(a), t.as_mut_slice()),
+                    None => (&mut [][..], &mut [][..]),
+                };
+                BayesStorage {
+                    axes: &mut b.axes,
+                    terms: &mut b.terms,
+                    rows: &mut b.rows,
+                    log_prior: &mut b.log_prior,
+                    lambda: &mut b.lambda,
+                    log_lambda: &mut b.log_lambda,
+                    open: &mut b.open,
+                    objectness_axis: axis,
+                    objectness_terms: terms,
+                    objectness_required: false,
+                    has_objectness: &mut has_objectness,
+                }
             }),
             recal: [r0, r1, r2, r3],
         }
         .decode(&header, body)?;
         for (map, n) in t.maps.iter_mut().zip(knots) {
             map.truncate(n);
+        }
+        if !has_objectness {
+            if let Some(b) = t.bayes.as_mut() {
+                b.objectness = None;
+            }
         }
         if k < 2 {
             return Err(TableError::ClassCount.into());
@@ -346,6 +392,7 @@ impl DynTable {
                 lambda: b.lambda,
                 log_lambda: b.log_lambda,
                 open: b.open,
+                objectness: b.objectness.as_ref().map(|(a, t)| (*a, t.as_slice())),
             }),
             settings: &self.settings,
             maps: Maps(core::array::from_fn(|h| {
@@ -504,8 +551,9 @@ impl DynTable {
         const B_BAYES: usize,
         const C: usize,
         const N: usize,
+        const F: usize,
     >(
-        t: &crate::Table<K, B_ML, B_MAP, B_BAYES, C, N>,
+        t: &crate::Table<K, B_ML, B_MAP, B_BAYES, C, N, F>,
     ) -> Self {
         let v = t.view();
         Self {
@@ -523,6 +571,7 @@ impl DynTable {
                 lambda: b.lambda,
                 log_lambda: b.log_lambda,
                 open: b.open,
+                objectness: b.objectness.map(|(a, t)| (a, t.to_vec())),
             }),
             maps: v.maps.0.map(<[Knot]>::to_vec),
         }
@@ -546,7 +595,8 @@ impl<
         const B_BAYES: usize,
         const C: usize,
         const N: usize,
-    > TryFrom<&DynTable> for crate::Table<K, B_ML, B_MAP, B_BAYES, C, N>
+        const F: usize,
+    > TryFrom<&DynTable> for crate::Table<K, B_ML, B_MAP, B_BAYES, C, N, F>
 {
     type Error = DecodeError;
 

@@ -53,6 +53,7 @@ pub const fn table<
     const B_BAYES: usize,
     const C: usize,
     const N: usize,
+    const F: usize,
 >(
     names: [ClassName; K],
     rows: [u64; K],
@@ -69,7 +70,9 @@ pub const fn table<
     bayes_open: Option<OpenParams>,
     recal: [[Knot; N]; 4],
     recal_len: [u8; 4],
-) -> Table<K, B_ML, B_MAP, B_BAYES, C, N> {
+    bayes_os_axis: [Axis; F],
+    bayes_os_terms: [[[f32; C]; B_BAYES]; F],
+) -> Table<K, B_ML, B_MAP, B_BAYES, C, N, F> {
     Table {
         names,
         rows,
@@ -86,6 +89,8 @@ pub const fn table<
         bayes_open,
         recal,
         recal_len,
+        bayes_os_axis,
+        bayes_os_terms,
     }
 }
 
@@ -132,6 +137,7 @@ pub const fn qmeta(
     log_prior: &'static [[u8; 4]],
     open: Option<OpenParams>,
     maps: [&'static [[u8; 8]]; 4],
+    objectness: Option<(Axis, &'static [[u8; 4]])>,
     len: usize,
 ) -> Meta<'static> {
     Meta {
@@ -147,6 +153,7 @@ pub const fn qmeta(
         log_prior,
         open,
         maps,
+        objectness,
         len,
     }
 }

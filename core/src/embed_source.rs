@@ -75,13 +75,18 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
             "MAP_KNOTS",
             knots,
         ),
+        (
+            "1 when the embedded table has the objectness feature, else 0.",
+            "OBJECTNESS_FEATURE",
+            usize::from(bayes.is_some_and(|b| b.objectness.is_some())),
+        ),
     ];
     for (doc, name, value) in consts {
         let _ = writeln!(s, "/// {doc}\npub const {name}: usize = {value};");
     }
     let _ = writeln!(
         s,
-        "/// The type of [`TABLE`].\npub type EmbeddedTable = {krate}::Table<K, BINS_ML, BINS_MAP, BINS_BAYES, CATEGORIES, MAP_KNOTS>;"
+        "/// The type of [`TABLE`].\npub type EmbeddedTable = {krate}::Table<K, BINS_ML, BINS_MAP, BINS_BAYES, CATEGORIES, MAP_KNOTS, OBJECTNESS_FEATURE>;"
     );
     let _ = writeln!(
         s,
@@ -179,12 +184,34 @@ pub fn rust_source(t: &DynTable, source: &str, bytes: &[u8], krate: &str) -> Str
         })
         .collect();
     let map_lens: Vec<String> = v.maps.0.iter().map(|m| format!("{}", m.len())).collect();
+    let (os_axis, os_terms) = match bayes.and_then(|b| b.objectness) {
+        Some((a, terms)) => (
+            format!(
+                "[E::axis({}, {}, {}, {}, {}, {})]",
+                f(a.lo),
+                f(a.hi),
+                f(a.width),
+                f(a.inv_width),
+                a.bins,
+                f(a.cap)
+            ),
+            format!(
+                "[[{}]]",
+                terms
+                    .chunks(categories.max(1))
+                    .map(floats)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ),
+        None => ("[]".into(), "[]".into()),
+    };
     let _ = writeln!(
         s,
         "/// The validated table, ready to score: no decoding at start-up.\n\
          pub static TABLE: EmbeddedTable = E::table(\n    [{}],\n    {:?},\n    [{}],\n    [{}],\n    [{}],\n    \
          {krate}::Settings {{ lambda_ml: {}, lambda_map: {}, edge_mode: {krate}::EdgeMode::{edge}, \
-         upper_tail: {krate}::UpperTail::{tail} }},\n    {axes},\n    {terms},\n    {brows},\n    {log_prior},\n    {lambda},\n    {log_lambda},\n    {open},\n    [{}],\n    [{}],\n);",
+         upper_tail: {krate}::UpperTail::{tail} }},\n    {axes},\n    {terms},\n    {brows},\n    {log_prior},\n    {lambda},\n    {log_lambda},\n    {open},\n    [{}],\n    [{}],\n    {os_axis},\n    {os_terms},\n);",
         names.join(", "),
         v.rows,
         priors.join(", "),
@@ -250,6 +277,19 @@ pub fn quantized_source(
     };
     let m = &q.meta;
     let maps: Vec<String> = m.maps.iter().map(|k| part8(k)).collect();
+    let objectness = match m.objectness {
+        Some((a, terms)) => format!(
+            "Some((E::axis({}, {}, {}, {}, {}, {}), {}))",
+            f(a.lo),
+            f(a.hi),
+            f(a.width),
+            f(a.inv_width),
+            a.bins,
+            f(a.cap),
+            part4(terms)
+        ),
+        None => "None".into(),
+    };
     let code = if m.bits == 8 { "i8" } else { "i16" };
     let open = open_source(m.open);
     let mut s = String::new();
@@ -313,7 +353,7 @@ pub fn quantized_source(
         s,
         "/// The embedded quantized section, validated at build time: no decoding at start-up.\n\
          pub static QUANTIZED: EmbeddedQTable = E::qtable(\n    \
-         E::qmeta({}, {}, {}, {}, {}, 0x{:08x}, [{}, {}, {}], {}, {open}, [{}], {}),\n    [{}],\n    [{}],\n);",
+         E::qmeta({}, {}, {}, {}, {}, 0x{:08x}, [{}, {}, {}], {}, {open}, [{}], {}, {}),\n    [{}],\n    [{}],\n);",
         m.bits,
         m.k,
         m.bins_ml,
@@ -325,6 +365,7 @@ pub fn quantized_source(
         f(m.log_lambda),
         part4(m.log_prior),
         maps.join(", "),
+        objectness,
         m.len,
         classes.join(",\n     "),
         logits.join(",\n     ")

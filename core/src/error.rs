@@ -249,6 +249,12 @@ pub enum DecodeError {
         /// Knots stored in the table.
         found: u16,
     },
+    /// The table has the objectness feature (DESIGN §1.6) and the type it is decoded
+    /// into has no room for it, or the type requires the feature and the table lacks it.
+    ObjectnessMismatch {
+        /// Whether the table has the feature.
+        found: bool,
+    },
     /// The checksum matched, but the body does not follow the format (a field is
     /// missing, an enum tag is unknown, a name is not UTF-8, bytes are left over, a
     /// varint is not in its shortest form).
@@ -281,6 +287,12 @@ impl fmt::Display for DecodeError {
             Self::MapCapacity { head, capacity, found } => write!(
                 f,
                 "table has a recalibration map of {found} knots for the {head} head; the table type holds {capacity}"
+            ),
+            Self::ObjectnessMismatch { found: true } => f.write_str(
+                "table has the objectness feature; the table type has no room for it"
+            ),
+            Self::ObjectnessMismatch { found: false } => f.write_str(
+                "table has no objectness feature; the table type requires one"
             ),
             Self::Malformed => f.write_str("table body does not follow the mlmap format"),
             Self::Invalid(e) => write!(f, "invalid table: {e}"),

@@ -67,7 +67,7 @@ mod table;
 mod view;
 mod wire;
 
-pub use bayes::{BayesView, MAX_LAMBDA_BAYES};
+pub use bayes::{objectness_logit, BayesView, MAX_LAMBDA_BAYES};
 pub use bounded::{Bounded, BoundedTable};
 pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, MapError, TableError};
 pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};

@@ -158,7 +158,7 @@ pub(crate) fn score_into<M: Backend>(
     out: &mut [f32],
     scratch: &mut [f32],
 ) -> Result<(), InferError> {
-    bayes.log_scores_into(logits, scratch)?;
+    bayes.log_scores_into(logits, objectness, scratch)?;
     score_from_log_scores::<M>(scratch, open, logits, objectness, out);
     Ok(())
 }

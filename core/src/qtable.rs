@@ -38,9 +38,13 @@
 //!   (DESIGN §1.8).
 //! * Maps (optional; section version 3): the table's recalibration maps (DESIGN §1.9)
 //!   for the heads the section holds, applied after each head as the `f32` layer does.
+//! * Objectness feature (optional, with the Bayes head; section version 3): its axis
+//!   and terms; its bin is looked up at run time from the objectness, as the `f32`
+//!   head does.
 
 use crate::bayes;
 use crate::error::{Head, InferError};
+use crate::histogram::Axis;
 use crate::layer::{self, Scores};
 use crate::math::Backend;
 use crate::open::{self, OpenParams};
@@ -210,6 +214,9 @@ pub enum QField {
     /// or is for a head the section does not hold (`class` is the head's code: 0 ML,
     /// 1 MAP, 2 Bayes, 3 open).
     Map,
+    /// The objectness feature's axis is not a valid axis, or a term is not finite and
+    /// small (DESIGN §1.6).
+    Objectness,
 }
 
 impl QField {
@@ -230,6 +237,7 @@ impl QField {
                 "open head's unknown log-score (not -inf for epsilon 0, or not finite)"
             }
             Self::Map => "recalibration map (knots, head or order)",
+            Self::Objectness => "objectness feature (axis or terms)",
         }
     }
 }
@@ -324,6 +332,8 @@ pub struct Meta<'a> {
     pub(crate) open: Option<OpenParams>,
     /// The heads' recalibration maps (version 3), ML, MAP, Bayes, open; empty: none.
     pub(crate) maps: [&'a [[u8; 8]]; 4],
+    /// The objectness feature (version 3, flag bit 2): its axis and its `B * C` terms.
+    pub(crate) objectness: Option<(Axis, &'a [[u8; 4]])>,
     /// Length of the section, trailer included.
     pub(crate) len: usize,
 }
@@ -481,9 +491,14 @@ pub(crate) fn parse<'a>(
     let log_lambda = r.f32()?;
     // Flags: bit 0 the Bayes head; in version 3, bit 1 the open head (which needs the
     // Bayes head). Version 2 is the version of sections with the open head.
+    // Version 3 also has bit 2: the objectness feature (which needs the Bayes head).
     let has_maps = version == QUANTIZED_VERSION;
-    let max_flags = if has_maps { 3 } else { 1 };
+    let max_flags = if has_maps { 7 } else { 1 };
     let has_open = version == QUANTIZED_VERSION_2 || (has_maps && flags & 2 != 0);
+    let has_feature = has_maps && flags & 4 != 0;
+    if has_feature && flags & 1 == 0 {
+        return Err(QTableError::Malformed);
+    }
     if reserved != 0 || flags > max_flags || (has_open && flags & 1 == 0) {
         return Err(QTableError::Malformed);
     }
@@ -634,11 +649,23 @@ pub(crate) fn parse<'a>(
             log_unknown: f32::from_bits(l),
         });
     }
+    let mut objectness = None;
+    if has_feature {
+        let (lo, hi) = (r.f32()?, r.f32()?);
+        let axis = Axis::new(lo, hi, usize::from(bins_bayes))
+            .map_err(|_| invalid(QField::Objectness, 0))?;
+        let terms = r.values(usize::from(bins_bayes) * usize::from(categories))?;
+        if !terms.iter().all(|&t| small_log(f32::from_le_bytes(t))) {
+            return Err(invalid(QField::Objectness, 0));
+        }
+        objectness = Some((axis, terms));
+    }
     let mut maps: [&'a [[u8; 8]]; 4] = [&[]; 4];
     if has_maps {
-        // One or more records (head code, knot count, knots), head codes increasing.
+        // Records (head code, knot count, knots), head codes increasing: one or more,
+        // or none when the section is version 3 for the objectness feature only.
         let records = r.u8()?;
-        if records == 0 {
+        if records == 0 && !has_feature {
             return Err(QTableError::Malformed);
         }
         let mut next = 0usize;
@@ -678,6 +705,7 @@ pub(crate) fn parse<'a>(
         log_prior,
         open,
         maps,
+        objectness,
         len: section.len(),
     })
 }
@@ -836,6 +864,19 @@ impl<'a> QView<'_, 'a> {
                     for l in scratch.iter_mut() {
                         *l += self.meta.log_lambda;
                     }
+                }
+            }
+        }
+        // The objectness feature last, as the f32 head adds it.
+        if let Some((axis, terms)) = &self.meta.objectness {
+            let z = bayes::objectness_logit(objectness).clamp(axis.lo, axis.hi);
+            let row = axis.bin(z).and_then(|b| {
+                let at = b.checked_mul(cats)?;
+                terms.get(at..at.checked_add(cats)?)
+            });
+            if let Some(row) = row {
+                for (l, &t) in scratch.iter_mut().zip(row) {
+                    *l += f32::from_le_bytes(t);
                 }
             }
         }

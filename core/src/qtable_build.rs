@@ -174,14 +174,18 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
         _ => &[],
     });
     let records = maps.iter().filter(|m| !m.is_empty()).count();
-    let version = if records > 0 {
+    let feature = bayes.and_then(|b| b.objectness);
+    let version = if records > 0 || feature.is_some() {
         QUANTIZED_VERSION
     } else if open.is_some() {
         QUANTIZED_VERSION_2
     } else {
         QUANTIZED_VERSION_1
     };
-    let flags = u8::from(bayes.is_some()) | if records > 0 && open.is_some() { 2 } else { 0 };
+    let v3 = version == QUANTIZED_VERSION;
+    let flags = u8::from(bayes.is_some())
+        | if v3 && open.is_some() { 2 } else { 0 }
+        | if feature.is_some() { 4 } else { 0 };
     out.put(&QUANTIZED_MAGIC)?;
     out.put(&[version, params.bits, flags, 0])?;
     for v in [narrow(k), bins_ml, bins_bayes, cats] {
@@ -250,7 +254,14 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
         }
         debug_assert_eq!(out.len - before, OPEN_LEN);
     }
-    if records > 0 {
+    if let Some((axis, terms)) = feature {
+        out.put(&axis.lo.to_le_bytes())?;
+        out.put(&axis.hi.to_le_bytes())?;
+        for t in terms {
+            out.put(&t.to_le_bytes())?;
+        }
+    }
+    if v3 {
         // At most 4 records of at most MAX_KNOTS knots: each count fits a byte.
         out.put(&[u8::try_from(records).unwrap_or(0)])?;
         for (code, knots) in maps.iter().enumerate().filter(|(_, m)| !m.is_empty()) {

@@ -64,6 +64,7 @@ pub struct Table<
     const B_BAYES: usize = 0,
     const C: usize = 0,
     const N: usize = 0,
+    const F: usize = 0,
 > {
     pub(crate) names: [ClassName; K],
     pub(crate) rows: [u64; K],
@@ -85,6 +86,10 @@ pub struct Table<
     pub(crate) recal: [[Knot; N]; 4],
     /// Knots in use in each of `recal` (0: no map).
     pub(crate) recal_len: [u8; 4],
+    /// The objectness feature's axis (DESIGN §1.6), when `F = 1`.
+    pub(crate) bayes_os_axis: [Axis; F],
+    /// The objectness feature's terms, bin-major then category, when `F = 1`.
+    pub(crate) bayes_os_terms: [[[f32; C]; B_BAYES]; F],
 }
 
 impl<
@@ -94,11 +99,12 @@ impl<
         const B_BAYES: usize,
         const C: usize,
         const N: usize,
-    > Table<K, B_ML, B_MAP, B_BAYES, C, N>
+        const F: usize,
+    > Table<K, B_ML, B_MAP, B_BAYES, C, N, F>
 {
     /// Largest number of bytes [`Table::to_slice`] writes for this shape; size a static
     /// buffer with it.
-    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C, N);
+    pub const MAX_ENCODED_LEN: usize = wire::max_encoded_len(K, B_ML, B_MAP, B_BAYES, C, N, F);
 
     const SHAPE_OK: () = assert!(
         K >= 2
@@ -109,10 +115,11 @@ impl<
             && B_MAP <= u16::MAX as usize
             && B_BAYES <= u16::MAX as usize
             && ((B_BAYES == 0 && C == 0) || (B_BAYES >= 1 && (C == K || C == K + 1)))
-            && N <= MAX_KNOTS,
+            && N <= MAX_KNOTS
+            && (F == 0 || (F == 1 && B_BAYES >= 1)),
         "a Table needs 2..65535 classes, 1..=65535 bins per head, either no Bayes head \
-         (B_BAYES = C = 0) or one with K or K + 1 categories, and at most MAX_KNOTS knots \
-         per map"
+         (B_BAYES = C = 0) or one with K or K + 1 categories, at most MAX_KNOTS knots \
+         per map, and F = 0, or F = 1 (the objectness feature) with a Bayes head"
     );
 
     /// `(K, B_ML, B_MAP)` as stored in a table header.
@@ -139,6 +146,10 @@ impl<
                 lambda: self.bayes_lambda,
                 log_lambda: self.bayes_log_lambda,
                 open: self.bayes_open,
+                objectness: self
+                    .bayes_os_axis
+                    .first()
+                    .map(|&a| (a, self.bayes_os_terms.as_flattened().as_flattened())),
             }),
             settings: &self.settings,
             maps: if N == 0 {
@@ -259,6 +270,7 @@ impl<
         let mut raw_names = [""; K];
         let mut lens = [(0, 0); K];
         let [r0, r1, r2, r3] = &mut table.recal;
+        let mut has_objectness = false;
         let knots = Slots {
             names: &mut table.names,
             raw_names: &mut raw_names,
@@ -276,6 +288,10 @@ impl<
                 lambda: &mut table.bayes_lambda,
                 log_lambda: &mut table.bayes_log_lambda,
                 open: &mut table.bayes_open,
+                objectness_axis: &mut table.bayes_os_axis,
+                objectness_terms: table.bayes_os_terms.as_flattened_mut().as_flattened_mut(),
+                objectness_required: F > 0,
+                has_objectness: &mut has_objectness,
             }),
             recal: [r0, r1, r2, r3],
         }
@@ -339,6 +355,8 @@ impl<
             bayes_open: None,
             recal: [[Knot::ZERO; N]; 4],
             recal_len: [0; 4],
+            bayes_os_axis: [Axis::ZERO; F],
+            bayes_os_terms: [[[0.0; C]; B_BAYES]; F],
         }
     }
 

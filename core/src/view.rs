@@ -309,6 +309,13 @@ pub(crate) struct BayesStorage<'t> {
     pub(crate) log_lambda: &'t mut f32,
     /// The open head's parameters; `None` for a version-2 table.
     pub(crate) open: &'t mut Option<OpenParams>,
+    /// Room for the objectness feature (DESIGN §1.6): its axis (0 or 1 entries) and its
+    /// terms; `required` when the table type always has the feature.
+    pub(crate) objectness_axis: &'t mut [Axis],
+    pub(crate) objectness_terms: &'t mut [f32],
+    pub(crate) objectness_required: bool,
+    /// Set to whether the decoded table has the feature.
+    pub(crate) has_objectness: &'t mut bool,
 }
 
 impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> wire::BodySink<'a>
@@ -351,11 +358,15 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> wire::B
                 rows: b.rows,
                 axes: b.axes,
                 terms: b.terms,
+                objectness_axis: b.objectness_axis,
+                objectness_terms: b.objectness_terms,
             },
             None => BayesSlots {
                 rows: &mut [],
                 axes: &mut [],
                 terms: &mut [],
+                objectness_axis: &mut [],
+                objectness_terms: &mut [],
             },
         }
     }
@@ -418,9 +429,36 @@ impl<'a, F: AsRef<[f32]> + AsMut<[f32]>, G: AsRef<[f32]> + AsMut<[f32]>> Slots<'
                 return Err(TableError::BayesShape.into());
             }
             *b.lambda = lambda;
-            *b.log_lambda = bayes::validate(k, bins, lambda, b.axes, b.terms, b.rows, b.log_prior)?;
+            let cats = b.rows.len();
+            let feature = match (parsed.objectness, b.objectness_axis.first_mut()) {
+                (Some(n), Some(axis)) => {
+                    if Some(n) != bins.checked_mul(cats) {
+                        return Err(TableError::BayesShape.into());
+                    }
+                    let terms = b.objectness_terms.get(..n).ok_or(DecodeError::Malformed)?;
+                    Some((axis, terms))
+                }
+                (None, _) if !b.objectness_required => None,
+                (found, _) => {
+                    return Err(DecodeError::ObjectnessMismatch {
+                        found: found.is_some(),
+                    })
+                }
+            };
+            *b.has_objectness = feature.is_some();
+            let features = k + usize::from(feature.is_some());
+            *b.log_lambda = bayes::validate(
+                k,
+                bins,
+                lambda,
+                b.axes,
+                b.terms,
+                b.rows,
+                b.log_prior,
+                feature,
+            )?;
             *b.open = match parsed.open {
-                Some((t, e)) => Some(OpenParams::new(t, e, k, bins, lambda)?),
+                Some((t, e)) => Some(OpenParams::new(t, e, features, bins, lambda)?),
                 None => None,
             };
         }

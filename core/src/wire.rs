@@ -13,6 +13,8 @@
 //! Bayes    version 2 only: lambda (f32 LE), rows per category (varint C + C varint
 //!          u64), per logit its lo and hi (varint K + K pairs of f32 LE), the log-terms
 //!          (varint K*B*C + K*B*C f32 LE, logit-major: logit, then bin, then category)
+//! Feature  version 4 with a Bayes head: the objectness feature, an option (0, or 1
+//!          then its axis (lo, hi) and its B*C terms, varint length + f32 LE)
 //! Open     version 3: temperature, epsilon (f32 LE each); version 4, with a Bayes
 //!          head: an option (0, or 1 then temperature and epsilon)
 //! Maps     version 4 only: varint n >= 1, then n records (head code u8, strictly
@@ -21,7 +23,8 @@
 //! ```
 //!
 //! Version 4's header always holds the Bayes shape, `(0, 0)` without a Bayes head.
-//! A table with a recalibration map is written as version 4; without one, a table
+//! A table with a recalibration map or the objectness feature is written as version
+//! 4; without either, a table
 //! without a Bayes head is written as version 1, a table with one as version 2, a table
 //! with a Bayes head and the open head's parameters as version 3: each table has exactly
 //! one encoding.
@@ -428,7 +431,8 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
         t.serialize_element(&MAGIC)?;
         let bayes = view.bayes();
         let open = bayes.and_then(|b| b.open());
-        let maps = view.maps.any();
+        // Version 4 for a map or the objectness feature.
+        let maps = view.maps.any() || bayes.is_some_and(|b| b.objectness.is_some());
         t.serialize_element(&match (maps, bayes.is_some(), open.is_some()) {
             (true, _, _) => FORMAT_VERSION,
             (false, false, _) => VERSION_1,
@@ -472,7 +476,11 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Serialize for Message<'_, '_, F, G> {
             t.serialize_element(b.all_terms())?;
         }
         if maps {
-            if bayes.is_some() {
+            if let Some(b) = &bayes {
+                let feature = b
+                    .objectness
+                    .map(|(a, terms)| ((a.lo, a.hi), FloatsSeq(terms)));
+                t.serialize_element(&feature)?;
                 t.serialize_element(&open.map(|o| (o.temperature(), o.epsilon())))?;
             }
             t.serialize_element(&MapsSeq(view.maps))?;
@@ -498,6 +506,20 @@ impl Serialize for MapsSeq<'_> {
                 let code = u8::try_from(slot).unwrap_or(u8::MAX);
                 seq.serialize_element(&(code, KnotsSeq(knots)))?;
             }
+        }
+        seq.end()
+    }
+}
+
+/// A sequence of floats on the wire (the objectness feature's terms).
+struct FloatsSeq<'a>(&'a [f32]);
+
+impl Serialize for FloatsSeq<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let mut seq = s.serialize_seq(Some(self.0.len()))?;
+        for v in self.0 {
+            seq.serialize_element(v)?;
         }
         seq.end()
     }
@@ -614,14 +636,18 @@ pub(crate) const fn max_encoded_len(
     bins_bayes: usize,
     categories: usize,
     knots: usize,
+    features: usize,
 ) -> usize {
-    let maps = if knots == 0 {
+    let maps = if knots == 0 && features == 0 {
         0
     } else {
+        let os_terms = bins_bayes * categories;
         2 * varint_len(u16::MAX as usize) // the Bayes shape, (0, 0) without that head
             + 1 // the open head's option
             + 1 // the number of maps
             + 4 * (1 + varint_len(knots) + 8 * knots)
+            + 1 // the objectness feature's option
+            + features * (8 + varint_len(os_terms) + 4 * os_terms)
     };
     let bayes = if bins_bayes == 0 {
         0

@@ -328,6 +328,11 @@ fn counter_for(m: &ClassMoments, bins: usize, edges: EdgeMode) -> Result<BinCoun
 /// cannot hold; [`FitError::Changed`] if the input changes between the passes.
 pub fn fit(source: &impl RowSource, params: &FitParams) -> Result<DynTable, FitError> {
     params.validate()?;
+    // The objectness feature is fitted from the rows held in memory (the statistics of
+    // the two streaming passes do not hold the objectness).
+    if params.bayes.is_some_and(|b| b.objectness) {
+        return TrainingSet::read(source)?.fit(params);
+    }
     let stats = pass_a(source)?;
     let edges = stats.edges(params)?;
     let mut counts = FitCounts::new(&edges);
@@ -444,6 +449,8 @@ pub struct TrainingSet {
     /// background), for Bayes counts at any bin count.
     logits: Vec<f32>,
     categories: Vec<usize>,
+    /// Every labelled row's objectness as `f32`, for the objectness feature.
+    objectness: Vec<f32>,
 }
 
 impl TrainingSet {
@@ -461,7 +468,7 @@ impl TrainingSet {
             .collect();
         let mut values: Vec<Vec<f32>> = std::vec![Vec::new(); moments.len()];
         let mut bayes = BayesMoments::new(source.classes());
-        let (mut logits, mut categories) = (Vec::new(), Vec::new());
+        let (mut logits, mut categories, mut objectness) = (Vec::new(), Vec::new(), Vec::new());
         let k = moments.len();
         source.for_each_row(|row| {
             if let Some((c, x)) = class_value(&row) {
@@ -474,6 +481,7 @@ impl TrainingSet {
                 bayes.push(&row);
                 categories.push(c);
                 logits.extend(row.logits.iter().map(|&x| x as f32));
+                objectness.push(row.objectness as f32);
             }
             Ok::<(), FitError>(())
         })?;
@@ -488,6 +496,7 @@ impl TrainingSet {
             bayes,
             logits,
             categories,
+            objectness,
         })
     }
 
@@ -499,7 +508,12 @@ impl TrainingSet {
     /// [`FitError::Param`] for a bin count out of `1..=65535`; [`FitError::Edges`] or
     /// [`FitError::OutOfF32`] for a logit whose range a table cannot hold.
     pub fn bayes_counts(&self, bins: usize) -> Result<BayesCounts, FitError> {
-        BayesParams { bins, lambda: 1.0 }.validate()?;
+        BayesParams {
+            bins,
+            lambda: 1.0,
+            objectness: false,
+        }
+        .validate()?;
         let mut counters = self.bayes.counters(bins)?;
         let k = self.moments.len();
         let no_id = None;
@@ -524,6 +538,68 @@ impl TrainingSet {
             .ok_or(FitError::Changed {
                 path: self.path.clone(),
             })
+    }
+
+    /// The Bayes head's counts with `bins` bins per logit and, with `objectness`, the
+    /// objectness feature's (DESIGN §1.6): linspace bins over the finite objectness
+    /// logits of every labelled row, each row counted in the bin of its objectness
+    /// logit clamped into the axis (so objectness 0 and 1 count in the first and last
+    /// bin), with the layer's own `objectness_logit`.
+    ///
+    /// # Errors
+    ///
+    /// As [`bayes_counts`](Self::bayes_counts); [`FitError::Objectness`] when no
+    /// labelled row has an objectness strictly between 0 and 1.
+    pub fn bayes_counts_with(
+        &self,
+        bins: usize,
+        objectness: bool,
+    ) -> Result<BayesCounts, FitError> {
+        let counts = self.bayes_counts(bins)?;
+        if !objectness {
+            return Ok(counts);
+        }
+        let z: Vec<f32> = self
+            .objectness
+            .iter()
+            .map(|&os| crate::objectness_logit(os))
+            .collect();
+        let finite = || z.iter().copied().filter(|v| v.is_finite());
+        let (lo, hi) = (
+            finite().fold(f32::INFINITY, f32::min),
+            finite().fold(f32::NEG_INFINITY, f32::max),
+        );
+        if !(lo <= hi) {
+            return Err(FitError::Objectness {
+                reason: "every labelled row has an objectness of 0 or 1",
+            });
+        }
+        let axis = checked_axis(
+            "objectness",
+            f64::from(lo),
+            f64::from(hi),
+            bins,
+            EdgeMode::Linspace,
+        )?;
+        let rows = counts.rows().to_vec();
+        let mut counters: Vec<BinCounter> =
+            rows.iter().map(|_| BinCounter::from_axis(axis)).collect();
+        for (&v, &c) in z.iter().zip(&self.categories) {
+            if let Some(counter) = counters.get_mut(c) {
+                counter.add(v.clamp(axis.lo(), axis.hi()));
+            }
+        }
+        let mut all = Vec::with_capacity(rows.len() * bins);
+        for (counter, &n) in counters.into_iter().zip(&rows) {
+            let h = counter.finish();
+            if h.total() != n {
+                return Err(FitError::Changed {
+                    path: self.path.clone(),
+                });
+            }
+            all.extend_from_slice(h.counts());
+        }
+        Ok(counts.with_objectness((axis.lo(), axis.hi()), all))
     }
 
     /// The training input this set was read from.
@@ -591,7 +667,11 @@ impl TrainingSet {
         let map = self.histograms(params.bins_map, params.edges)?;
         let table = build_table(&self.moments, &ml, &map, params.settings())?;
         match params.bayes {
-            Some(p) => with_bayes(table, &self.bayes_counts(p.bins)?, p.lambda),
+            Some(p) => with_bayes(
+                table,
+                &self.bayes_counts_with(p.bins, p.objectness)?,
+                p.lambda,
+            ),
             None => Ok(table),
         }
     }

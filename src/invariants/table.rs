@@ -182,8 +182,9 @@ pub fn check_table<
     const B_BAYES: usize,
     const C: usize,
     const N: usize,
+    const F: usize,
 >(
-    table: &Table<K, B_ML, B_MAP, B_BAYES, C, N>,
+    table: &Table<K, B_ML, B_MAP, B_BAYES, C, N, F>,
 ) -> Result<(), Violation> {
     check_settings(table.settings())?;
     let missing = |found| Violation::ClassCount { expected: K, found };

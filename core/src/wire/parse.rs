@@ -53,6 +53,9 @@ pub(crate) struct BayesSlots<'s> {
     pub(crate) rows: &'s mut [u64],
     pub(crate) axes: &'s mut [Axis],
     pub(crate) terms: &'s mut [f32],
+    /// Room for the objectness feature's axis (0 or 1 entries) and terms.
+    pub(crate) objectness_axis: &'s mut [Axis],
+    pub(crate) objectness_terms: &'s mut [f32],
 }
 
 /// What a body held besides the classes' storage: the settings, the number of classes,
@@ -65,6 +68,9 @@ pub(crate) struct Parsed {
     pub(crate) open: Option<(f32, f32)>,
     /// Knots of each head's recalibration map as stored (0: none), version 4.
     pub(crate) maps: [usize; 4],
+    /// The objectness feature's number of terms as stored, when the table has it
+    /// (version 4).
+    pub(crate) objectness: Option<usize>,
 }
 
 /// What the header announced about the body's optional parts.
@@ -127,6 +133,27 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     } else {
         None
     };
+    // Version 4: the objectness feature, an option after the Bayes section (its axis
+    // `(lo, hi)`, then its terms).
+    let mut objectness = None;
+    if bayes.is_some() && maps {
+        let tag = u8::deserialize(&mut de).map_err(malformed)?;
+        match tag {
+            0 => {}
+            1 => {
+                let (lo, hi) = <(f32, f32)>::deserialize(&mut de).map_err(malformed)?;
+                let slots = sink.bayes();
+                if let Some(a) = slots.objectness_axis.first_mut() {
+                    (a.lo, a.hi) = (lo, hi);
+                }
+                let n = CountFloats(slots.objectness_terms)
+                    .deserialize(&mut de)
+                    .map_err(malformed)?;
+                objectness = Some(n);
+            }
+            _ => return Err(DecodeError::Malformed),
+        }
+    }
     let open = if bayes.is_some() && open {
         Some(<(f32, f32)>::deserialize(&mut de).map_err(malformed)?)
     } else if bayes.is_some() && maps {
@@ -153,10 +180,41 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
         bayes,
         open,
         maps: counts,
+        objectness,
     })
 }
 
-/// The recalibration maps of a version-4 body: a sequence of one or more records
+/// A sequence of floats stored into a slice while it has room and counted to its end.
+struct CountFloats<'s>(&'s mut [f32]);
+
+impl<'de> DeserializeSeed<'de> for CountFloats<'_> {
+    type Value = usize;
+
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> Result<usize, D::Error> {
+        d.deserialize_seq(self)
+    }
+}
+
+impl<'de> Visitor<'de> for CountFloats<'_> {
+    type Value = usize;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a sequence of floats")
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
+        let mut n = 0usize;
+        while let Some(v) = seq.next_element::<f32>()? {
+            if let Some(slot) = self.0.get_mut(n) {
+                *slot = v;
+            }
+            n = n.saturating_add(1);
+        }
+        Ok(n)
+    }
+}
+
+/// The recalibration maps of a version-4 body: a sequence of records
 /// `(head code, knots)`, head codes strictly increasing (0 ML, 1 MAP, 2 Bayes, 3 open),
 /// each map's knots a sequence of `(x, y)` pairs.
 struct MapsSeed<'s, S> {
@@ -196,9 +254,10 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for MapsSeed<'_, S> {
                 None => break,
             }
         }
-        if records == 0 {
-            return Err(A::Error::invalid_length(0, &"at least one map"));
-        }
+        // No record is valid only for a table with the objectness feature; the
+        // decoder's canonical-length check refuses a version-4 table that needs no
+        // version 4.
+        let _ = records;
         Ok(())
     }
 }

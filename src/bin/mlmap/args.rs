@@ -101,6 +101,11 @@ pub struct FitSettings {
     /// Leave the Bayes head out (a version-1 table that older builds read).
     #[arg(long, conflicts_with_all = ["bins_bayes", "lambda_bayes"])]
     pub no_bayes: bool,
+    /// The Bayes categories also model the objectness logit, ln(OS) - ln(1 - OS), as one
+    /// more histogram (DESIGN §1.6), so that rows given as background with a low
+    /// objectness teach the open head what they look like. Needs the rows (not --stats).
+    #[arg(long, conflicts_with = "no_bayes")]
+    pub objectness_feature: bool,
 }
 
 impl FitSettings {
@@ -116,6 +121,7 @@ impl FitSettings {
             bayes: (!self.no_bayes).then_some(BayesParams {
                 bins: self.bins_bayes,
                 lambda: self.lambda_bayes,
+                objectness: self.objectness_feature,
             }),
         }
     }
@@ -156,7 +162,7 @@ pub struct StatsArgs {
         value_name = "STATS",
         conflicts_with_all = [
             "bins_ml", "lambda_ml", "bins_map", "lambda_map", "edges", "upper_tail",
-            "bins_bayes", "lambda_bayes", "no_bayes",
+            "bins_bayes", "lambda_bayes", "no_bayes", "objectness_feature",
         ]
     )]
     pub stats: Option<PathBuf>,
@@ -273,6 +279,10 @@ pub struct TuneArgs {
     /// How many of the best candidates to print per head.
     #[arg(long, default_value_t = 5, value_name = "N")]
     pub top: usize,
+    /// The Bayes categories also model the objectness logit (DESIGN §1.6), as `fit
+    /// --objectness-feature` does.
+    #[arg(long, conflicts_with = "no_bayes")]
+    pub objectness_feature: bool,
     /// Fit no recalibration map (DESIGN §1.9): by default each head gets one where it
     /// lowers the validation ECE out of sample within the guards.
     #[arg(long)]

@@ -25,12 +25,15 @@ use super::{FitError, MAX_BINS};
 /// |---|---|---|---|
 /// | `bins` | 22 | bins per logit | `1..=65535` |
 /// | `lambda` | 0.001 | additive smoothing inside the logarithm | `(0, 1]` |
+/// | `objectness` | false | the objectness feature: a histogram of the objectness logit per category (DESIGN §1.6) | |
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BayesParams {
     /// Bins per logit.
     pub bins: usize,
     /// Additive smoothing inside the logarithm.
     pub lambda: f32,
+    /// Whether the categories also model the objectness logit.
+    pub objectness: bool,
 }
 
 impl Default for BayesParams {
@@ -38,6 +41,7 @@ impl Default for BayesParams {
         Self {
             bins: 22,
             lambda: 1e-3,
+            objectness: false,
         }
     }
 }
@@ -328,6 +332,7 @@ impl BayesCounters {
             ranges,
             rows: rows.to_vec(),
             counts,
+            objectness: None,
         })
     }
 }
@@ -341,6 +346,9 @@ pub struct BayesCounts {
     rows: Vec<u64>,
     /// Category-major: the `B` counts of category `c`, logit `j` start at `(c K + j) B`.
     counts: Vec<u64>,
+    /// The objectness feature: its axis's first and last edge, and the `B` counts of
+    /// each category (category-major).
+    objectness: Option<((f32, f32), Vec<u64>)>,
 }
 
 impl BayesCounts {
@@ -364,6 +372,17 @@ impl BayesCounts {
         &self.counts
     }
 
+    /// The objectness feature's axis range and counts (category-major), when fitted.
+    pub fn objectness(&self) -> Option<((f32, f32), &[u64])> {
+        self.objectness.as_ref().map(|(r, c)| (*r, c.as_slice()))
+    }
+
+    /// The same counts with the objectness feature's.
+    pub(crate) fn with_objectness(mut self, range: (f32, f32), counts: Vec<u64>) -> Self {
+        self.objectness = Some((range, counts));
+        self
+    }
+
     /// The head with smoothing `lambda`: log-terms `ln(count / n_c + lambda)` computed
     /// in `f64` and rounded to `f32`, in the table's logit-major order (logit, bin,
     /// category).
@@ -384,11 +403,23 @@ impl BayesCounts {
             }
         }
         debug_assert_eq!(terms.len(), k * bins * cats);
+        // The objectness feature: bin-major, then category.
+        let objectness = self.objectness.as_ref().map(|(range, counts)| {
+            let mut t = Vec::with_capacity(bins * cats);
+            for b in 0..bins {
+                for (c, &n) in self.rows.iter().enumerate() {
+                    let count = counts.get(c * bins + b).copied().unwrap_or(0);
+                    t.push((count as f64 / n.max(1) as f64 + lambda64).ln() as f32);
+                }
+            }
+            (*range, t)
+        });
         BayesSpec {
             lambda,
             rows: self.rows.clone(),
             ranges: self.ranges.clone(),
             terms,
+            objectness,
         }
     }
 }

@@ -104,6 +104,13 @@ pub enum FitError {
         /// What is wrong with the bytes.
         reason: String,
     },
+    /// The objectness feature (DESIGN §1.6) was asked for and cannot be fitted: every
+    /// labelled row has an objectness of 0 or 1 (no finite objectness logit), or the
+    /// rows come from statistics files, which do not hold the objectness.
+    Objectness {
+        /// Why.
+        reason: &'static str,
+    },
 }
 
 impl FitError {
@@ -123,7 +130,8 @@ impl FitError {
             | Self::EdgesDiffer
             | Self::RowsDiffer { .. }
             | Self::ClassRowsDiffer { .. }
-            | Self::Format { .. } => true,
+            | Self::Format { .. }
+            | Self::Objectness { .. } => true,
         }
     }
 }
@@ -138,6 +146,9 @@ impl fmt::Display for FitError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Data(e) => write!(f, "{e}"),
+            Self::Objectness { reason } => {
+                write!(f, "the objectness feature cannot be fitted: {reason}")
+            }
             Self::Param {
                 name,
                 value,

@@ -138,12 +138,19 @@ impl FitStats {
     ///
     /// # Errors
     ///
-    /// [`FitError::Param`] for parameters out of range; [`FitError::ParamsDiffer`] when
+    /// [`FitError::Param`] for parameters out of range; [`FitError::Objectness`] for the
+    /// objectness feature, which needs the rows; [`FitError::ParamsDiffer`] when
     /// the statistics recorded other settings; [`FitError::EmptyClasses`] (naming "the
     /// statistics") when a class has no rows; [`FitError::Edges`] or
     /// [`FitError::OutOfF32`] for classes whose range a table cannot hold.
     pub fn edges(&self, params: &FitParams) -> Result<FitEdges, FitError> {
         params.validate()?;
+        if params.bayes.is_some_and(|b| b.objectness) {
+            return Err(FitError::Objectness {
+                reason: "statistics do not hold the objectness of the rows: fit from the \
+                         rows themselves",
+            });
+        }
         if self.params.is_some_and(|p| p != *params) {
             return Err(FitError::ParamsDiffer);
         }
@@ -691,6 +698,7 @@ impl ParamsWire {
                 Some((b, lambda)) => Some(BayesParams {
                     bins: bins(b)?,
                     lambda,
+                    objectness: false,
                 }),
                 None => None,
             },

@@ -26,6 +26,8 @@ pub struct BayesGrid {
     pub bins: Vec<usize>,
     /// Lambdas to try, each in `(0, 1]`.
     pub lambdas: Vec<f32>,
+    /// Whether the categories also model the objectness logit (DESIGN §1.6).
+    pub objectness: bool,
 }
 
 /// The grid and policies of [`tune`].
@@ -340,12 +342,18 @@ pub fn tune(
             judge,
             detail: params.detail,
         };
-        let counts = |b: usize| train.bayes_counts(b).map_err(|e| e.to_string());
+        let counts = |b: usize| {
+            train
+                .bayes_counts_with(b, grid.objectness)
+                .map_err(|e| e.to_string())
+        };
         let found = search_bayes(&bayes_params, counts, |d, _| progress(first + d, total))
             .map_err(map_err)?;
         result.heads.push(found);
         let chosen = best(&result, Head::Bayes)?;
-        let counts = train.bayes_counts(chosen.bins).map_err(fit)?;
+        let counts = train
+            .bayes_counts_with(chosen.bins, grid.objectness)
+            .map_err(fit)?;
         table = crate::host::fit::with_bayes(table, &counts, chosen.lambda).map_err(fit)?;
         if !params.epsilons.is_empty() {
             // The temperature as the baseline fits it: by NLL on the labelled

@@ -125,6 +125,7 @@ pub fn run(a: &DemoArgs) -> Result<()> {
         bayes: Some(BayesGrid {
             bins: vec![22],
             lambdas: lambdas.clone(),
+            objectness: false,
         }),
         epsilons: tune::epsilon_grid(),
         lambdas,

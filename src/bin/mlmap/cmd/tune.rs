@@ -28,7 +28,11 @@ fn bayes_grid(a: &TuneArgs) -> Result<Option<BayesGrid>> {
     );
     let lambdas = tune::bayes_lambda_grid(min, max, a.lambdas_per_decade)
         .map_err(|e| CliError::Input(format!("--lambda-bayes-min/--lambda-bayes-max: {e}")))?;
-    Ok(Some(BayesGrid { bins, lambdas }))
+    Ok(Some(BayesGrid {
+        bins,
+        lambdas,
+        objectness: a.objectness_feature,
+    }))
 }
 
 pub fn run(a: &TuneArgs) -> Result<()> {
