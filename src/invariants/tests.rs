@@ -596,6 +596,7 @@ fn hand_table(background: bool) -> crate::host::DynTable {
         rows,
         ranges: vec![(0.0, 2.0); 2],
         terms,
+        objectness: None,
     })
     .unwrap()
 }
