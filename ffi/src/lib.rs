@@ -77,7 +77,8 @@ const TAG: u64 = u64::from_le_bytes(*b"MLMPtab1");
 /// part: 256, and room for a recalibration map of `MAX_KNOTS` knots per head (4 * 32
 /// knots of 8 bytes, 4 lengths, padding).
 const fn table_words(classes: usize, bins: usize, bins_bayes: usize) -> usize {
-    (1288 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes)).div_ceil(8)
+    (1288 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes))
+        .div_ceil(8)
 }
 
 const _: () =

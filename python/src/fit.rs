@@ -947,7 +947,10 @@ fn tune_report<'py>(
         for m in &tuned.maps {
             let d = PyDict::new(py);
             d.set_item("kept", m.kept)?;
-            d.set_item("cv_ece_without", Some(m.ece_without).filter(|v| v.is_finite()))?;
+            d.set_item(
+                "cv_ece_without",
+                Some(m.ece_without).filter(|v| v.is_finite()),
+            )?;
             d.set_item("cv_ece_with", Some(m.ece_with).filter(|v| v.is_finite()))?;
             d.set_item("within_guards", m.excess == 0.0)?;
             let knots: Vec<(f32, f32)> = m.knots.iter().map(|k| (k.x, k.y)).collect();
