@@ -953,7 +953,8 @@ fn tune_report<'py>(
             )?;
             d.set_item("cv_ece_with", Some(m.ece_with).filter(|v| v.is_finite()))?;
             d.set_item("within_guards", m.excess == 0.0)?;
-            let knots: Vec<(f32, f32)> = m.knots.iter().map(|k| (k.x, k.y)).collect();
+            // Lists `[x, y]`, as the JSON report has them.
+            let knots: Vec<[f32; 2]> = m.knots.iter().map(|k| [k.x, k.y]).collect();
             d.set_item("knots", knots)?;
             maps.set_item(m.head.name(), d)?;
         }
