@@ -3,9 +3,9 @@
 # `-machine mps2-an386`), with the table decoded from a calibration sector and the one
 # embedded at build time, and every score matches the host's float64 values
 # (`tools/firmware_expected.py`). Also shows the run can fail: a canary build with one
-# perturbed expected ML score and one perturbed open-head score must exit non-zero and
-# report both. Installs qemu-system-arm if missing; without
-# a Cortex-M4F toolchain the proof fails (MLMAP_ALLOW_SKIP=1 skips it outside CI).
+# perturbed expected ML score, one perturbed open-head score and one perturbed score after
+# a recalibration map must exit non-zero and report all three. Installs qemu-system-arm if
+# missing; without a Cortex-M4F toolchain the proof fails (MLMAP_ALLOW_SKIP=1 skips it outside CI).
 # Run from the repository root.
 set -euo pipefail
 
@@ -70,6 +70,8 @@ grep -qE '^FAIL .*: [a-z ]+ ML: got' "$work/canary.log" ||
     fail "the canary firmware did not fail on its perturbed ML score"
 grep -qE '^FAIL .*: [a-z ]+ open: got' "$work/canary.log" ||
     fail "the canary firmware did not fail on its perturbed open-head score"
+grep -qE '^FAIL .*: small table with maps open: got' "$work/canary.log" ||
+    fail "the canary firmware did not fail on its perturbed score after a map"
 echo "ok: the canary firmware failed as it must (exit status $status)"
 
 section "build: cargo build --release --target $THUMB_TARGET (via $THUMB_VIA)"

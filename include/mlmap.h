@@ -8,6 +8,14 @@
  * detections. Every function returns an ::mlmap_status_t (`MLMAP_OK` is 0) and checks
  * every pointer and length; ::mlmap_status_str describes any status.
  *
+ * A table may hold a recalibration map per head (format version 4, docs/DESIGN.md
+ * section 1.9): every scoring call of that head applies it, so the head's top score
+ * `t` becomes `g(t)` and every other score keeps its ratio to the top (strictly below
+ * it): the decision and the order of the classes are the head's own, and the scores
+ * no longer sum to the objectness. The storage has room for a map of the format's
+ * maximum, 32 knots, for every head; a map that breaks the knots' rule is
+ * `MLMAP_ERR_INVALID_TABLE`.
+ *
  * Memory that must be disjoint (docs/DESIGN.md section 5.1): no output may overlap
  * the table storage, and no two outputs may overlap each other. A single-detection
  * call copies its K logits first, so its scores may overlap them in any way; a batch
@@ -55,7 +63,7 @@
 
 /** Bytes of ::mlmap_table_t: an upper bound of what the library uses. */
 #define MLMAP_TABLE_SIZE \
-  ((((size_t)256 + (size_t)MLMAP_MAX_CLASSES * (160 + 8 * (size_t)MLMAP_MAX_BINS) + \
+  ((((size_t)1288 + (size_t)MLMAP_MAX_CLASSES * (160 + 8 * (size_t)MLMAP_MAX_BINS) + \
      ((size_t)MLMAP_MAX_CLASSES + 1) * (16 + 4 * (size_t)MLMAP_MAX_CLASSES * \
      (size_t)MLMAP_MAX_BINS_BAYES)) + 7) / 8 * 8)
 
@@ -136,7 +144,9 @@ enum mlmap_status_t
   MLMAP_ERR_UNSUPPORTED_VERSION = 9,
   /**
    * Decode: more classes, ML bins or MAP bins than `MLMAP_MAX_CLASSES` and
-   * `MLMAP_MAX_BINS` allow.
+   * `MLMAP_MAX_BINS` allow. (A recalibration map with more knots than the storage
+   * holds would be this status too, but cannot occur: the storage holds a map of
+   * the format's maximum, 32 knots, for every head.)
    */
   MLMAP_ERR_SHAPE_TOO_LARGE = 10,
   /**
@@ -148,7 +158,10 @@ enum mlmap_status_t
    */
   MLMAP_ERR_MALFORMED = 12,
   /**
-   * Decode: the body parsed, but a table invariant does not hold.
+   * Decode: the body parsed, but a table invariant does not hold; this includes a
+   * recalibration map (docs/DESIGN.md §1.9) that breaks the knots' rule (2 to 32
+   * knots, from x = 0 to x = 1, x increasing, y in (0, 1] non-decreasing) or is for
+   * a head the table does not have.
    */
   MLMAP_ERR_INVALID_TABLE = 13,
   /**
@@ -422,6 +435,10 @@ mlmap_status_t mlmap_class_index(const mlmap_table_t *table,
  * Scores one detection with the ML head: `out[i] = OS (L_i + lambda) / sum_j (L_j +
  * lambda)` (docs/DESIGN.md §1.2); the scores sum to the objectness.
  *
+ * When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+ * scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+ * ratio to it, and the sum is no longer bound to the objectness.
+ *
  * Bit for bit the scores of the Rust layer and of `mlmap apply` for the same table.
  *
  * @param table A decoded table.
@@ -448,6 +465,10 @@ mlmap_status_t mlmap_ml(const mlmap_table_t *table,
  * Scores one detection with the MAP head: `out[i] = OS (L_i P_i + lambda) / sum_j
  * (L_j P_j + lambda)`, with the Gaussian prior `P` (docs/DESIGN.md §1.2).
  *
+ * When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+ * scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+ * ratio to it, and the sum is no longer bound to the objectness.
+ *
  * Parameters and statuses as for `mlmap_ml`.
  *
  * @param table A decoded table.
@@ -469,6 +490,10 @@ mlmap_status_t mlmap_map(const mlmap_table_t *table,
  * Scores one detection with the Bayes head: `out[i] = OS p_i`, with `p` the
  * posterior over the categories given every logit (docs/DESIGN.md §1.6). With a
  * `background` category the scores sum to at most the objectness.
+ *
+ * When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+ * scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+ * ratio to it, and the sum is no longer bound to the objectness.
  *
  * @param table A decoded table with a Bayes head.
  * @param logits The detection's K logits.
@@ -495,6 +520,10 @@ mlmap_status_t mlmap_bayes(const mlmap_table_t *table,
  * largest logit (ties: the lowest index). With `epsilon = 0` and no `background`
  * category, `q = 1` and the scores are `OS softmax(z / T)`.
  *
+ * When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+ * scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+ * ratio to it, and the sum is no longer bound to the objectness.
+ *
  * Bit for bit the scores of the Rust layer (`Table::open`) and of `mlmap apply`'s
  * `open_*` columns for the same table.
  *
@@ -518,7 +547,8 @@ mlmap_status_t mlmap_open(const mlmap_table_t *table,
 
 /**
  * Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
- * `objectness[r]` into row `r` of `out`.
+ * `objectness[r]` into row `r` of `out`, the head's recalibration map applied as in
+ * `mlmap_ml` (every batch call gives the bits of its single-detection call).
  *
  * Every argument is checked before anything is written: on a failed check nothing
  * is written, `*done` included. On a row that cannot be scored (NaN logit, bad

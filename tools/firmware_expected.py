@@ -18,6 +18,12 @@ and a small one with an unknown category (`tests/golden/layer/small_open.mlmap`:
 4 Bayes bins, a background category, temperature 1.75, epsilon 0.05), which the firmware
 decodes from its bytes.
 
+The recalibration maps (docs/DESIGN.md §1.9) are checked on
+`tests/golden/layer/small_maps.mlmap` (the small table above with a map on every head):
+its cases and every head's mapped float64 scores are copied from
+`tests/golden/layer/maps.csv`, which the numpy reference (`tools/mlmap_ref.py goldens`)
+wrote.
+
 It also writes the quantized cases: int8 codes for the section of
 `tables/default_q8.mlmap` (whose scales and zero points are read here from the section's
 bytes, by docs/FORMAT.md), each with its dequantized logits `float32(q - zp) * scale` in
@@ -54,6 +60,8 @@ DEFAULT_OUT = os.path.join(ROOT, "firmware", "src", "expected.rs")
 TEST_CSV = os.path.join(ROOT, "examples", "data", "test.csv")
 QUANTIZED = os.path.join(ROOT, "tables", "default_q8.mlmap")
 SMALL_OPEN = os.path.join(ROOT, "tests", "golden", "layer", "small_open.mlmap")
+SMALL_MAPS = os.path.join(ROOT, "tests", "golden", "layer", "small_maps.mlmap")
+MAPS_CSV = os.path.join(ROOT, "tests", "golden", "layer", "maps.csv")
 
 # Rows of examples/data/test.csv scored besides the synthetic cases.
 CSV_ROWS = 16
@@ -457,6 +465,36 @@ def error_cases(k):
     return out
 
 
+def map_cases(k):
+    """The rows of maps.csv for small_maps.mlmap: (case, logits, objectness, the four
+    heads' scores (ML, MAP, Bayes, open), or the Rust error)."""
+    with open(MAPS_CSV, newline="") as fh:
+        rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    out = []
+    for r in rows:
+        if r["table"] != "small_maps":
+            continue
+        logits = [np.float32(r[f"x{i}"]) for i in range(k)]
+        os_ = np.float32(r["objectness"])
+        err = r["error"]
+        if err.startswith("nan_logit:"):
+            err = f"Some(InferError::NanLogit {{ class: {int(err[len('nan_logit:'):])} }})"
+            scores = [[0.0] * k for _ in range(4)]
+        elif err == "objectness":
+            err = "Some(InferError::Objectness)"
+            scores = [[0.0] * k for _ in range(4)]
+        elif err == "":
+            err = "None"
+            scores = [[float(r[f"{h}{i}"]) for i in range(k)]
+                      for h in ("ml", "map", "bayes", "open")]
+        else:
+            raise ValueError(f"{MAPS_CSV}: unknown error {err!r}")
+        out.append((r["case"], logits, os_, scores, err))
+    if len(out) < 40:
+        raise ValueError(f"{MAPS_CSV}: only {len(out)} rows for small_maps")
+    return out
+
+
 def lit(v):
     """A Rust f32 expression for float32 `v`, exact."""
     v = np.float32(v)
@@ -527,7 +565,7 @@ def render(table, source, small, small_source):
         f"//! `python3 tools/firmware_expected.py` from `{source}` and `{small_source}`.",
         "//! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.",
         "",
-        "use crate::case::{Case, ErrorCase, Expect, OpenExpect, QCase};",
+        "use crate::case::{Case, ErrorCase, Expect, MapCase, OpenExpect, QCase};",
         "use mlmap::InferError;",
         "",
         "/// Number of classes of the table.",
@@ -596,6 +634,29 @@ def render(table, source, small, small_source):
             f"        error: InferError::{err},",
             "    },",
         ]
+    with open(SMALL_MAPS, "rb") as fh:
+        maps_crc = struct.unpack("<I", fh.read()[-4:])[0]
+    lines += [
+        "];",
+        "",
+        f"/// CRC of `{os.path.relpath(SMALL_MAPS, ROOT)}`, the small table with a recalibration",
+        "/// map on every head.",
+        f"pub const MAPS_TABLE_CRC: u32 = 0x{maps_crc:08x};",
+        "",
+        "/// Detections and every head's scores after its map (ML, MAP, Bayes, open), from",
+        f"/// `{os.path.relpath(MAPS_CSV, ROOT)}` (the numpy reference), or the error.",
+        "pub static MAP_CASES: &[MapCase<K>] = &[",
+    ]
+    for label, logits, os_, scores, err in map_cases(k):
+        lines += [
+            "    MapCase {",
+            f"        label: {json.dumps(label)},",
+            f"        logits: [{', '.join(lit(x) for x in logits)}],",
+            f"        objectness: {lit(os_)},",
+            "        scores: [",
+        ]
+        lines += [f"            [{', '.join(lit64(v) for v in h)}]," for h in scores]
+        lines += ["        ],", f"        error: {err},", "    },"]
     lines += ["];", ""]
     return "\n".join(lines)
 

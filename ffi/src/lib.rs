@@ -77,7 +77,8 @@ const TAG: u64 = u64::from_le_bytes(*b"MLMPtab1");
 /// part: 256, and room for a recalibration map of `MAX_KNOTS` knots per head (4 * 32
 /// knots of 8 bytes, 4 lengths, padding).
 const fn table_words(classes: usize, bins: usize, bins_bayes: usize) -> usize {
-    (1288 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes)).div_ceil(8)
+    (1288 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes))
+        .div_ceil(8)
 }
 
 const _: () =
@@ -136,13 +137,18 @@ pub enum mlmap_status_t {
     /// Decode: a format version this library does not read.
     MLMAP_ERR_UNSUPPORTED_VERSION = 9,
     /// Decode: more classes, ML bins or MAP bins than `MLMAP_MAX_CLASSES` and
-    /// `MLMAP_MAX_BINS` allow.
+    /// `MLMAP_MAX_BINS` allow. (A recalibration map with more knots than the storage
+    /// holds would be this status too, but cannot occur: the storage holds a map of
+    /// the format's maximum, 32 knots, for every head.)
     MLMAP_ERR_SHAPE_TOO_LARGE = 10,
     /// Decode: a Bayes head with more bins than `MLMAP_MAX_BINS_BAYES`.
     MLMAP_ERR_BAYES_SHAPE_TOO_LARGE = 11,
     /// Decode: the body does not follow the format.
     MLMAP_ERR_MALFORMED = 12,
-    /// Decode: the body parsed, but a table invariant does not hold.
+    /// Decode: the body parsed, but a table invariant does not hold; this includes a
+    /// recalibration map (docs/DESIGN.md §1.9) that breaks the knots' rule (2 to 32
+    /// knots, from x = 0 to x = 1, x increasing, y in (0, 1] non-decreasing) or is for
+    /// a head the table does not have.
     MLMAP_ERR_INVALID_TABLE = 13,
     /// Scoring or decision: a logit is NaN.
     MLMAP_ERR_NAN_LOGIT = 14,
@@ -221,6 +227,10 @@ impl From<DecodeError> for mlmap_status_t {
             DecodeError::Invalid(TableError::Temperature) => MLMAP_ERR_OPEN_TEMPERATURE,
             DecodeError::Invalid(TableError::Epsilon) => MLMAP_ERR_OPEN_EPSILON,
             DecodeError::Invalid(_) => MLMAP_ERR_INVALID_TABLE,
+            // The storage has room for `MAX_KNOTS` knots per map, the most a valid map
+            // has (more are `Invalid`), so this never happens in this library; were
+            // it built with less room, the table would be too large for it.
+            DecodeError::MapCapacity { .. } => MLMAP_ERR_SHAPE_TOO_LARGE,
             _ => MLMAP_ERR_MALFORMED,
         }
     }
@@ -899,6 +909,10 @@ unsafe fn batch(
 /// Scores one detection with the ML head: `out[i] = OS (L_i + lambda) / sum_j (L_j +
 /// lambda)` (docs/DESIGN.md §1.2); the scores sum to the objectness.
 ///
+/// When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+/// scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+/// ratio to it, and the sum is no longer bound to the objectness.
+///
 /// Bit for bit the scores of the Rust layer and of `mlmap apply` for the same table.
 ///
 /// @param table A decoded table.
@@ -929,6 +943,10 @@ pub unsafe extern "C" fn mlmap_ml(
 /// Scores one detection with the MAP head: `out[i] = OS (L_i P_i + lambda) / sum_j
 /// (L_j P_j + lambda)`, with the Gaussian prior `P` (docs/DESIGN.md §1.2).
 ///
+/// When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+/// scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+/// ratio to it, and the sum is no longer bound to the objectness.
+///
 /// Parameters and statuses as for `mlmap_ml`.
 ///
 /// @param table A decoded table.
@@ -954,6 +972,10 @@ pub unsafe extern "C" fn mlmap_map(
 /// Scores one detection with the Bayes head: `out[i] = OS p_i`, with `p` the
 /// posterior over the categories given every logit (docs/DESIGN.md §1.6). With a
 /// `background` category the scores sum to at most the objectness.
+///
+/// When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+/// scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+/// ratio to it, and the sum is no longer bound to the objectness.
 ///
 /// @param table A decoded table with a Bayes head.
 /// @param logits The detection's K logits.
@@ -994,6 +1016,10 @@ pub unsafe extern "C" fn mlmap_bayes(
 /// largest logit (ties: the lowest index). With `epsilon = 0` and no `background`
 /// category, `q = 1` and the scores are `OS softmax(z / T)`.
 ///
+/// When the table holds a recalibration map for this head (docs/DESIGN.md §1.9), the
+/// scores are those after it: the top score `t` becomes `g(t)`, the others keep their
+/// ratio to it, and the sum is no longer bound to the objectness.
+///
 /// Bit for bit the scores of the Rust layer (`Table::open`) and of `mlmap apply`'s
 /// `open_*` columns for the same table.
 ///
@@ -1031,7 +1057,8 @@ pub unsafe extern "C" fn mlmap_open(
 }
 
 /// Scores a batch with the ML head: row `r` of `logits` (row-major, `rows` x K) and
-/// `objectness[r]` into row `r` of `out`.
+/// `objectness[r]` into row `r` of `out`, the head's recalibration map applied as in
+/// `mlmap_ml` (every batch call gives the bits of its single-detection call).
 ///
 /// Every argument is checked before anything is written: on a failed check nothing
 /// is written, `*done` included. On a row that cannot be scored (NaN logit, bad
@@ -1287,7 +1314,7 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         10 => c"table has more classes or bins than MLMAP_MAX_CLASSES and MLMAP_MAX_BINS allow",
         11 => c"table's Bayes head has more bins than MLMAP_MAX_BINS_BAYES allows",
         12 => c"table body does not follow the mlmap format",
-        13 => c"table breaks an invariant",
+        13 => c"table breaks an invariant (a recalibration map's knots included)",
         14 => c"a logit is NaN",
         15 => c"objectness is NaN or outside [0, 1]",
         16 => c"a count does not match the table's number of classes, or is 0",

@@ -3,8 +3,9 @@
  * every status code, NULL and short buffers, misaligned pointers, every single-byte
  * corruption of a table, every aliasing rule of docs/DESIGN.md section 5.1 (outputs in
  * the table storage, overlapping batch buffers), NaN given to mlmap_decide, scores of
- * every head equal bit for bit to those `mlmap apply` wrote for the same rows, and the
- * open head's scores within 1e-6 of the float64 reference of tools/mlmap_ref.py.
+ * every head equal bit for bit to those `mlmap apply` wrote for the same rows, the
+ * open head's scores, and every head's scores after its recalibration map, within 1e-6
+ * of the float64 reference of tools/mlmap_ref.py.
  *
  * usage: host TABLE SMALL_TABLE INPUT_CSV APPLY_CSV GOLDEN_DIR
  *   TABLE        a version-3 table with the Bayes and open heads (tables/default.mlmap)
@@ -13,7 +14,9 @@
  *   APPLY_CSV    `mlmap apply --table TABLE --input INPUT_CSV` of them
  *   GOLDEN_DIR   tests/golden/layer: small_bayes.mlmap (version 2: a Bayes head, no
  *                open head), small_open.mlmap and small_open_nobg.mlmap (version 3),
- *                and open.csv, the reference's open-head scores for these and TABLE
+ *                and open.csv, the reference's open-head scores for these and TABLE;
+ *                small_maps.mlmap and small_maps_nobayes.mlmap (version 4: maps) and
+ *                maps.csv, the reference's scores of every head after its map
  *
  * Prints one line per failed check and ends with "N passed, M failed"; exits 1 on
  * any failure.
@@ -206,9 +209,14 @@ static void test_decode_errors(const uint8_t *bytes, size_t len) {
     CHECK(bytes[4] == 3 && bytes[5] == 3 && bytes[6] == 22 && bytes[7] == 17 &&
           bytes[8] == 22 && bytes[9] == 4);
     memcpy(b, bytes, len);
-    b[4] = 4;
+    b[4] = 5;
     fix_crc(b, len);
     EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_UNSUPPORTED_VERSION);
+    /* Version 4 without its maps' record count after the open head. */
+    memcpy(b, bytes, len);
+    b[4] = 4;
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(t, sizeof *t, b, len), MLMAP_ERR_MALFORMED);
 
     memcpy(b, bytes, len);
     b[5] = MLMAP_MAX_CLASSES + 1;
@@ -953,6 +961,167 @@ static void test_open_golden(const char *path, const char *const table_names[],
     free(text);
 }
 
+/* Maps that break the knots' rule (docs/DESIGN.md section 1.9), the CRC fixed:
+ * MLMAP_ERR_INVALID_TABLE and no table left in the storage. The open head's map is the
+ * last record of small_maps.mlmap: its three knots (0, 0.03125), (0.5, 0.25), (1, 1)
+ * are the 24 bytes before the CRC (docs/FORMAT.md). */
+static void test_map_errors(const uint8_t *bytes, size_t len) {
+    uint8_t *b = malloc(len);
+    const size_t knots = len - 4 - 24;
+    const float ok[6] = {0.0f, 0.03125f, 0.5f, 0.25f, 1.0f, 1.0f};
+    /* The stored knots are those above (an independent reading of the format). */
+    for (int i = 0; i < 6; i++) {
+        float v;
+        memcpy(&v, bytes + knots + 4 * i, 4);
+        CHECK(same_bits(v, ok[i]));
+    }
+    const struct {
+        int at;
+        float value;
+    } bad[] = {
+        {5, 1.5f},       /* last y above 1 */
+        {1, 0.0f},       /* first y 0 */
+        {3, 0.01f},      /* y decreasing */
+        {0, 0.1f},       /* first x not 0 */
+        {0, -0.0f},      /* first x -0 */
+        {4, 0.9f},       /* last x not 1 */
+        {2, 1.0f},       /* x not strictly increasing */
+        {2, NAN},        /* NaN x */
+        {3, NAN},        /* NaN y */
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        memcpy(b, bytes, len);
+        memcpy(b + knots + 4 * bad[i].at, &bad[i].value, 4);
+        fix_crc(b, len);
+        EXPECT(mlmap_table_decode(&scratch_t, sizeof scratch_t, b, len), MLMAP_ERR_INVALID_TABLE);
+        size_t k = 99;
+        EXPECT(mlmap_class_count(&scratch_t, &k), MLMAP_ERR_NO_TABLE);
+    }
+    memcpy(b, bytes, len);
+    fix_crc(b, len);
+    EXPECT(mlmap_table_decode(&scratch_t, sizeof scratch_t, b, len), MLMAP_OK);
+    free(b);
+}
+
+/* The heads of a table with recalibration maps (docs/DESIGN.md section 1.9) against the
+ * float64 reference of tools/mlmap_ref.py (maps.csv: table, case, objectness, x0..x2,
+ * ml0..2, map0..2, bayes0..2, open0..2, error; a head's columns are empty when the
+ * table lacks it), every score within 1e-6 and the error rows' statuses, through the
+ * single and the one-row batch calls (the same bits). small_maps.mlmap is
+ * small_open.mlmap with a map on every head, small_maps_nobayes.mlmap is small.mlmap
+ * with maps on ML and MAP (tools/mlmap_ref.py goldens): those tables without maps give
+ * each head's own scores, which the map must keep in order and decision. When the
+ * head's own top score is below 1e-30, its f32 scores have lost their ratios to
+ * underflow: only the mapped top is compared then (tests/maps.rs does the same). */
+static void test_maps_golden(const char *path, const mlmap_table_t *maps_t,
+                             const mlmap_table_t *maps_nb_t, const mlmap_table_t *raw_t,
+                             const mlmap_table_t *raw_nb_t) {
+    static const one_fn one[4] = {mlmap_ml, mlmap_map, mlmap_bayes, mlmap_open};
+    static const batch_fn batch[4] = {mlmap_ml_batch, mlmap_map_batch, mlmap_bayes_batch,
+                                     mlmap_open_batch};
+    static const char *const head_names[4] = {"ml", "map", "bayes", "open"};
+    size_t len;
+    char *text = (char *)read_file(path, &len), *save = NULL, *f[24];
+    unsigned rows[2] = {0}, bad_status = 0, far = 0, batch_diff = 0, order = 0, compared = 0;
+    unsigned top_only = 0;
+    double worst = 0.0;
+    for (char *line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        if (line[0] == '#' || strncmp(line, "table,", 6) == 0) continue;
+        int n = split(line, f, 24);
+        int which = n != 19                                   ? -1
+                    : strcmp(f[0], "small_maps") == 0         ? 0
+                    : strcmp(f[0], "small_maps_nobayes") == 0 ? 1
+                                                              : -1;
+        if (which < 0) {
+            fprintf(stderr, "%s: unexpected line (%d fields, table %s)\n", path, n, f[0]);
+            failed++;
+            continue;
+        }
+        rows[which]++;
+        const mlmap_table_t *t = which == 0 ? maps_t : maps_nb_t;
+        const mlmap_table_t *raw = which == 0 ? raw_t : raw_nb_t;
+        float os = strtof(f[2], NULL), x[3];
+        for (int i = 0; i < 3; i++) x[i] = strtof(f[3 + i], NULL);
+        mlmap_status_t want_err = MLMAP_OK;
+        if (strncmp(f[18], "nan_logit:", 10) == 0) want_err = MLMAP_ERR_NAN_LOGIT;
+        else if (strcmp(f[18], "objectness") == 0) want_err = MLMAP_ERR_OBJECTNESS;
+        else if (f[18][0] != '\0') want_err = (mlmap_status_t)-1;
+        for (int h = 0; h < 4; h++) {
+            int lacks = which == 1 && h >= 2;
+            mlmap_status_t want = lacks ? (h == 2 ? MLMAP_ERR_NO_BAYES_HEAD : MLMAP_ERR_NO_OPEN_HEAD)
+                                        : want_err;
+            float out[3] = {-7.0f, -7.0f, -7.0f}, b[3] = {-7.0f, -7.0f, -7.0f}, r[3];
+            size_t done = 99;
+            mlmap_status_t got = one[h](t, x, 3, os, out, 3);
+            mlmap_status_t got_batch = batch[h](t, x, 1, 3, &os, b, 3, &done);
+            if (got != want || got_batch != want) {
+                bad_status++;
+                fprintf(stderr, "  %s, %s, %s: status %d and %d (batch), want %d\n", f[0], f[1],
+                        head_names[h], (int)got, (int)got_batch, (int)want);
+                continue;
+            }
+            if (want != MLMAP_OK) {
+                bad_status += !(out[0] == -7.0f && out[1] == -7.0f && out[2] == -7.0f);
+                continue;
+            }
+            if (f[6 + 3 * h][0] == '\0') {
+                fprintf(stderr, "  %s, %s, %s: no expected scores\n", f[0], f[1], head_names[h]);
+                failed++;
+                continue;
+            }
+            EXPECT(one[h](raw, x, 3, os, r, 3), MLMAP_OK);
+            float top = 0.0f;
+            for (int i = 0; i < 3; i++)
+                if (r[i] > top) top = r[i];
+            double want_top = 0.0;
+            for (int i = 0; i < 3; i++) {
+                double w = strtod(f[6 + 3 * h + i], NULL);
+                if (w > want_top) want_top = w;
+            }
+            for (int i = 0; i < 3; i++) {
+                batch_diff += !same_bits(out[i], b[i]);
+                double w = strtod(f[6 + 3 * h + i], NULL);
+                if (top == 0.0f) {
+                    far += out[i] != 0.0f;
+                    continue;
+                }
+                if (top < 1e-30f) {
+                    /* Only the mapped top: the scores equal to the largest. */
+                    if (r[i] != top) continue;
+                    w = want_top;
+                    top_only++;
+                }
+                double err = fabs((double)out[i] - w);
+                if (!(err <= 1e-6)) {
+                    far++;
+                    fprintf(stderr, "  %s, %s, %s: score %d %.9g vs %s\n", f[0], f[1],
+                            head_names[h], i, (double)out[i], f[6 + 3 * h + i]);
+                }
+                if (err > worst) worst = err;
+            }
+            compared++;
+            /* The map keeps the head's decision and the order of its scores. */
+            size_t d_map = 99, d_raw = 98;
+            EXPECT(mlmap_decide(out, x, 3, &d_map), MLMAP_OK);
+            EXPECT(mlmap_decide(r, x, 3, &d_raw), MLMAP_OK);
+            order += d_map != d_raw;
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++) order += r[i] >= r[j] && !(out[i] >= out[j]);
+        }
+    }
+    fprintf(stderr,
+            "-- maps against the reference: %u head scores compared (%u by the top only), "
+            "worst score error %.3g\n",
+            compared, top_only, worst);
+    CHECK(rows[0] >= 40 && rows[1] >= 20);
+    CHECK(compared >= 200);
+    CHECK(bad_status == 0);
+    CHECK(far == 0);
+    CHECK(batch_diff == 0);
+    CHECK(order == 0);
+    free(text);
+}
+
 int main(int argc, char **argv) {
     if (argc != 6) {
         fprintf(stderr, "usage: %s TABLE SMALL_TABLE INPUT_CSV APPLY_CSV GOLDEN_DIR\n", argv[0]);
@@ -1067,11 +1236,35 @@ int main(int argc, char **argv) {
     const mlmap_table_t *const golden_tables[3] = {&table, &open_t, &nobg_t};
     test_open_golden(path, golden_names, golden_tables, 3);
 
+    /* Version-4 tables with recalibration maps: decoded into the same storage, every
+     * head after its map against the reference. */
+    size_t maps_len, maps_nb_len;
+    snprintf(path, sizeof path, "%s/small_maps.mlmap", argv[5]);
+    uint8_t *maps_bytes = read_file(path, &maps_len);
+    snprintf(path, sizeof path, "%s/small_maps_nobayes.mlmap", argv[5]);
+    uint8_t *maps_nb_bytes = read_file(path, &maps_nb_len);
+    static mlmap_table_t maps_t, maps_nb_t;
+    CHECK(maps_bytes[4] == 4 && maps_nb_bytes[4] == 4);
+    EXPECT(mlmap_table_decode(&maps_t, sizeof maps_t, maps_bytes, maps_len), MLMAP_OK);
+    EXPECT(mlmap_table_decode(&maps_nb_t, sizeof maps_nb_t, maps_nb_bytes, maps_nb_len), MLMAP_OK);
+    EXPECT(mlmap_shape(&maps_t, &shape), MLMAP_OK);
+    CHECK(shape.classes == 3 && shape.bins_bayes == 4 && shape.categories == 4);
+    EXPECT(mlmap_settings(&maps_t, &settings), MLMAP_OK);
+    CHECK(same_bits(settings.temperature, 1.75f) && same_bits(settings.epsilon, 0.05f));
+    test_head_arguments(&maps_t, mlmap_ml, mlmap_ml_batch, "ML with a map");
+    test_head_arguments(&maps_t, mlmap_open, mlmap_open_batch, "open with a map");
+    test_outputs_in_table(&maps_t);
+    snprintf(path, sizeof path, "%s/maps.csv", argv[5]);
+    test_maps_golden(path, &maps_t, &maps_nb_t, &open_t, &small_t);
+    test_map_errors(maps_bytes, maps_len);
+
     free(bytes);
     free(small);
     free(bayes_v2);
     free(open_bytes);
     free(nobg_bytes);
+    free(maps_bytes);
+    free(maps_nb_bytes);
     printf("%u passed, %u failed\n", passed, failed);
     return failed ? 1 : 0;
 }

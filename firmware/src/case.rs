@@ -60,3 +60,19 @@ pub struct QCase<const K: usize> {
     /// The dequantized logits and what each head must answer for them.
     pub case: Case<K>,
 }
+
+/// A detection scored by the small table with a recalibration map on every head
+/// (DESIGN §1.9).
+pub struct MapCase<const K: usize> {
+    /// What the case exercises.
+    pub label: &'static str,
+    /// Class logits.
+    pub logits: [f32; K],
+    /// Objectness.
+    pub objectness: f32,
+    /// The scores of the ML, MAP, Bayes and open heads after their maps, computed in
+    /// float64 by the numpy reference (zeros for an error case).
+    pub scores: [[f64; K]; 4],
+    /// The error every head must return instead.
+    pub error: Option<InferError>,
+}

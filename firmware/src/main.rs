@@ -23,6 +23,12 @@
 //! and its sibling without background or unknown (`small_open_nobg.mlmap`, epsilon 0)
 //! must give bit for bit the temperature layer `OS * softmax(z / T)`.
 //!
+//! The recalibration maps of DESIGN §1.9: `small_maps.mlmap`, the small table with a map
+//! on every head, is decoded as a `Table<3, 4, 2, 4, 4, 32>` and every head's mapped
+//! scores are compared, within [`TOLERANCE`], with the numpy reference's
+//! (`tests/golden/layer/maps.csv`); the decision and the order of the classes must be
+//! those of the small table without maps.
+//!
 //! It prints `N passed, M failed` over semihosting and exits with a non-zero status if
 //! anything failed.
 #![no_std]
@@ -46,8 +52,8 @@ use mlmap::{
 
 use case::{Case, Expect, OpenExpect};
 use expected::{
-    CASES, CLASS_NAMES, ERROR_CASES, K, OPEN_PARAMS, QCASES, Q_SCALES, Q_ZERO_POINTS, SMALL_CASES,
-    SMALL_OPEN_PARAMS, SMALL_SHAPE, SMALL_TABLE_CRC, TABLE_CRC,
+    CASES, CLASS_NAMES, ERROR_CASES, K, MAPS_TABLE_CRC, MAP_CASES, OPEN_PARAMS, QCASES, Q_SCALES,
+    Q_ZERO_POINTS, SMALL_CASES, SMALL_OPEN_PARAMS, SMALL_SHAPE, SMALL_TABLE_CRC, TABLE_CRC,
 };
 
 /// Largest accepted difference between a score computed on the device (`f32`, libm) and
@@ -93,6 +99,12 @@ type SmallTable = Table<K, S_ML, S_MAP, S_BAYES, S_CATS>;
 
 /// Its sibling's type: the same without the background category.
 type SmallNoBg = Table<K, S_ML, S_MAP, S_BAYES, K>;
+
+/// The small table with a recalibration map on every head (DESIGN §1.9).
+static MAPS_FILE: &[u8] = include_bytes!("../../tests/golden/layer/small_maps.mlmap");
+
+/// Its type: the small table's shape with room for maps of up to `MAX_KNOTS` knots.
+type MapsTable = Table<K, S_ML, S_MAP, S_BAYES, S_CATS, { mlmap::MAX_KNOTS }>;
 
 /// Batch buffers (rows = every case of the larger set).
 const ROWS: usize = if CASES.len() > SMALL_CASES.len() {
@@ -513,6 +525,144 @@ fn decode_small(r: &mut Report) -> Option<SmallTable> {
     }
 }
 
+/// The heads of the table with maps (DESIGN §1.9) against the numpy reference's mapped
+/// scores. The same table without maps is `small` (the maps were added to it): its
+/// scores decide what is compared. Where a head's own top score is below 1e-30 its
+/// `f32` scores have lost their ratios to underflow, so only the mapped top is
+/// compared; all-zero scores stay zero. The map keeps the decision and the order of the
+/// scores; the batch calls give the single calls' bits. Returns the largest deviation.
+fn check_maps(r: &mut Report, small: &SmallTable) -> f64 {
+    let name = "small table with maps";
+    let bytes: &'static [u8] = black_box(MAPS_FILE);
+    let crc = bytes
+        .get(bytes.len().saturating_sub(4)..)
+        .and_then(|b| b.try_into().ok())
+        .map(u32::from_le_bytes);
+    r.check(
+        crc == Some(MAPS_TABLE_CRC),
+        "maps table CRC",
+        format_args!("{crc:x?}, but expected.rs was computed for {MAPS_TABLE_CRC:08x}"),
+    );
+    // A table type without room for maps refuses it.
+    let refused = SmallTable::from_bytes(bytes).err();
+    r.check(
+        matches!(refused, Some(DecodeError::MapCapacity { .. })),
+        name,
+        format_args!("a table type without maps gave {refused:?}, want MapCapacity"),
+    );
+    let t = match MapsTable::from_bytes(bytes) {
+        Ok(t) => t,
+        Err(e) => {
+            r.check(false, name, format_args!("decode: {e:?}"));
+            return 0.0;
+        }
+    };
+    let heads = ["ML", "MAP", "Bayes", "open"];
+    let score = |head: usize, x: &[f32; K], os: f32| match head {
+        0 => (t.ml(x, os), small.ml(x, os)),
+        1 => (t.map(x, os), small.map(x, os)),
+        2 => (t.bayes(x, os), small.bayes(x, os)),
+        _ => (t.open(x, os), small.open(x, os)),
+    };
+    let mut max_err = 0.0f64;
+    for case in MAP_CASES {
+        let x = black_box(case.logits);
+        let os = black_box(case.objectness);
+        for (h, head) in heads.iter().enumerate() {
+            let (got, own) = score(h, &x, os);
+            let want = match case.error {
+                Some(e) => {
+                    r.check(
+                        got == Err(e),
+                        case.label,
+                        format_args!("{name} {head}: got {got:?}, want {e:?}"),
+                    );
+                    continue;
+                }
+                None => case.scores.get(h).copied().unwrap_or([f64::NAN; K]),
+            };
+            #[allow(unused_mut)]
+            let mut want = want;
+            #[cfg(feature = "canary")]
+            if case.label == MAP_CASES[0].label && h == 3 {
+                want[0] += 1e-3;
+            }
+            let (got, own) = match (got, own) {
+                (Ok(g), Ok(o)) => (g, o),
+                (g, o) => {
+                    r.check(
+                        false,
+                        case.label,
+                        format_args!("{name} {head}: got {g:?}, without maps {o:?}"),
+                    );
+                    continue;
+                }
+            };
+            let top = own.0.iter().fold(0.0f32, |m, &v| m.max(v));
+            let want_top = want.iter().fold(0.0f64, |m, &v| m.max(v));
+            let mut ok = true;
+            for i in 0..K {
+                let (g, o, w) = (got.0[i], own.0[i], want[i]);
+                if top == 0.0 {
+                    ok &= g == 0.0;
+                    continue;
+                }
+                if top < 1e-30 && o != top {
+                    continue;
+                }
+                let w = if top < 1e-30 { want_top } else { w };
+                let err = (f64::from(g) - w).abs();
+                max_err = max_err.max(err);
+                ok &= err <= TOLERANCE;
+                // The order of the classes is the head's own.
+                for j in 0..K {
+                    ok &= !(o >= own.0[j]) || g >= got.0[j];
+                }
+            }
+            ok &= got.decide(&x) == own.decide(&x);
+            r.check(
+                ok,
+                case.label,
+                format_args!("{name} {head}: got {:?}, want {want:?}", got.0),
+            );
+        }
+    }
+    // The batch calls give the single calls' bits.
+    let mut logits = [[0.0f32; K]; ROWS];
+    let mut os = [0.0f32; ROWS];
+    let mut n = 0;
+    for case in MAP_CASES.iter().filter(|c| c.error.is_none()) {
+        if let (Some(l), Some(o)) = (logits.get_mut(n), os.get_mut(n)) {
+            *l = case.logits;
+            *o = case.objectness;
+            n += 1;
+        }
+    }
+    let (logits, os) = (&logits[..n], &os[..n]);
+    let mut out = [[0.0f32; K]; ROWS];
+    let out = &mut out[..n];
+    for (h, head) in heads.iter().enumerate() {
+        let result = match h {
+            0 => t.ml_batch(logits, Some(os), out),
+            1 => t.map_batch(logits, Some(os), out),
+            2 => t.bayes_batch(logits, Some(os), out),
+            _ => t.open_batch(logits, Some(os), out),
+        };
+        let same = result.is_ok()
+            && logits
+                .iter()
+                .zip(os.iter())
+                .zip(out.iter())
+                .all(|((x, &o), row)| score(h, x, o).0.is_ok_and(|s| s.0 == *row));
+        r.check(
+            same && n >= 20,
+            "batch",
+            format_args!("{name} {head}: batch rows differ from single detections ({n} rows)"),
+        );
+    }
+    max_err
+}
+
 /// The open head with epsilon 0 and no background category is the temperature layer
 /// (DESIGN §1.8), bit for bit, on every case of the small table.
 fn check_temperature_identity(r: &mut Report) {
@@ -589,6 +739,7 @@ fn main() -> ! {
         CASES,
         OPEN_PARAMS,
     );
+    let mut max_err_maps = 0.0f64;
     if let Some(small) = decode_small(&mut r) {
         check_table(
             &mut r,
@@ -597,6 +748,7 @@ fn main() -> ! {
             SMALL_CASES,
             SMALL_OPEN_PARAMS,
         );
+        max_err_maps = check_maps(&mut r, &small);
     }
     check_temperature_identity(&mut r);
     if let Some(q) = decode_quantized(&mut r) {
@@ -609,16 +761,19 @@ fn main() -> ! {
     );
     hprintln!(
         "{} detections on the shipped table, {} on the small one, {} invalid inputs per \
-         table, {} int8 detections per quantized section; largest deviation from float64: \
-         ML {:e}, MAP {:e}, Bayes {:e}, open {:e} (tolerance {:e})",
+         table, {} int8 detections per quantized section, {} on the table with maps; largest \
+         deviation from float64: ML {:e}, MAP {:e}, Bayes {:e}, open {:e}, after maps {:e} \
+         (tolerance {:e})",
         CASES.len(),
         SMALL_CASES.len(),
         ERROR_CASES.len(),
         QCASES.len(),
+        MAP_CASES.len(),
         r.max_err_ml,
         r.max_err_map,
         r.max_err_bayes,
         r.max_err_open,
+        max_err_maps,
         TOLERANCE
     );
     hprintln!("{} passed, {} failed", r.passed, r.failed);

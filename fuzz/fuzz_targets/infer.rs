@@ -9,7 +9,10 @@
 //! epsilon 0 as fitted, or an arbitrary temperature and epsilon) and on arbitrary Bayes
 //! heads given an arbitrary temperature and epsilon, the open head's (DESIGN §1.8): its
 //! range and sum, the detector's decision, its formula, the temperature layer at epsilon
-//! 0 without background, and that a larger epsilon never raises a score.
+//! 0 without background, and that a larger epsilon never raises a score. Tables given
+//! arbitrary recalibration maps (DESIGN §1.9) on every head: accepted exactly when the
+//! knots keep the rule, and each mapped top is `g(top)`, the other scores below it,
+//! the order and the decision those of the table without maps.
 #![no_main]
 
 use std::sync::OnceLock;
@@ -17,8 +20,8 @@ use std::sync::OnceLock;
 use arbitrary::Unstructured;
 use libfuzzer_sys::fuzz_target;
 use mlmap_fuzz::{
-    check_detections, check_detections_with_bayes, check_detections_with_open, ArbBayes, ArbOpen,
-    ArbTable, Shipped, SHIPPED,
+    check_detections, check_detections_with_bayes, check_detections_with_maps,
+    check_detections_with_open, ArbBayes, ArbMaps, ArbOpen, ArbTable, Shipped, SHIPPED,
 };
 
 fn shipped() -> &'static Shipped {
@@ -28,7 +31,7 @@ fn shipped() -> &'static Shipped {
 
 fuzz_target!(|data: &[u8]| {
     let mut u = Unstructured::new(data);
-    let Ok(choice) = u.int_in_range(0u8..=7) else {
+    let Ok(choice) = u.int_in_range(0u8..=10) else {
         return;
     };
     match choice {
@@ -44,7 +47,39 @@ fuzz_target!(|data: &[u8]| {
         5 => bayes_table::<4, 1, 2, 3, 4>(&mut u),
         6 => bayes_table::<2, 4, 3, 1, 3>(&mut u),
         // The shipped table with an arbitrary temperature and epsilon.
-        _ => shipped_open(&mut u),
+        7 => shipped_open(&mut u),
+        // Arbitrary recalibration maps: on the shipped table, on an arbitrary table
+        // without a Bayes head, and on arbitrary Bayes and open heads.
+        8 => {
+            if let Ok(maps) = u.arbitrary::<ArbMaps>() {
+                check_detections_with_maps(shipped(), &maps, &mut u);
+            }
+        }
+        9 => {
+            let (Ok(a), Ok(maps)) = (u.arbitrary::<ArbTable<3, 4, 2>>(), u.arbitrary::<ArbMaps>())
+            else {
+                return;
+            };
+            if let Ok(t) = a.build() {
+                check_detections_with_maps(&t, &maps, &mut u);
+            }
+        }
+        _ => {
+            let (Ok(a), Ok(b), Ok(open), Ok(maps)) = (
+                u.arbitrary::<ArbTable<3, 4, 2>>(),
+                u.arbitrary::<ArbBayes<3, 4, 4>>(),
+                u.arbitrary::<ArbOpen>(),
+                u.arbitrary::<ArbMaps>(),
+            ) else {
+                return;
+            };
+            let Ok(t) = a.build() else { return };
+            let Some(t) = b.attach(&t) else { return };
+            match open.attach(&t) {
+                Some(o) => check_detections_with_maps(&o, &maps, &mut u),
+                None => check_detections_with_maps(&t, &maps, &mut u),
+            }
+        }
     }
 });
 

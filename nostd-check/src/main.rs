@@ -40,6 +40,12 @@ static SMALL_V2_BYTES: &[u8] = include_bytes!("../../tests/golden/layer/small_ba
 /// The small tables' type.
 type SmallOpen = Table<3, 4, 2, 4, 4>;
 
+/// The small open table with a recalibration map on every head (DESIGN §1.9).
+static SMALL_MAPS_BYTES: &[u8] = include_bytes!("../../tests/golden/layer/small_maps.mlmap");
+
+/// Its type: room for maps of up to `MAX_KNOTS` knots per head.
+type SmallMaps = Table<3, 4, 2, 4, 4, { mlmap::MAX_KNOTS }>;
+
 extern "C" {
     /// Deliberately defined nowhere: referencing it fails the link.
     fn mlmap_panic_path_reachable() -> !;
@@ -104,6 +110,39 @@ fn score_open<const B_ML: usize, const B_MAP: usize, const BB: usize, const C: u
     Ok(failed)
 }
 
+/// Scores one detection with every head of the table with maps and of the same table
+/// without them (`raw`), and checks what a map keeps: the scores in `[0, 1]`, the top
+/// score `g(top)` of the head's map, and the decision.
+fn score_mapped(
+    table: &SmallMaps,
+    raw: &SmallOpen,
+    logits: &[f32; 3],
+    os: f32,
+) -> Result<u32, InferError> {
+    let mut failed = 0;
+    for (head, mapped, own) in [
+        (Head::Ml, table.ml(logits, os)?, raw.ml(logits, os)?),
+        (Head::Map, table.map(logits, os)?, raw.map(logits, os)?),
+        (
+            Head::Bayes,
+            table.bayes(logits, os)?,
+            raw.bayes(logits, os)?,
+        ),
+        (Head::Open, table.open(logits, os)?, raw.open(logits, os)?),
+    ] {
+        let Some(g) = table.recal_map(head) else {
+            failed += 1;
+            continue;
+        };
+        let top = own.as_array().iter().fold(0.0f32, |m, &v| m.max(v));
+        let want = if top > 0.0 { g.eval(top) } else { 0.0 };
+        failed += u32::from(mapped.as_array().iter().fold(0.0f32, |m, &v| m.max(v)) != want);
+        failed += u32::from(!mapped.as_array().iter().all(|&v| (0.0..=1.0).contains(&v)));
+        failed += u32::from(mapped.decide(logits) != own.decide(logits));
+    }
+    Ok(failed)
+}
+
 /// Scores one detection with every head of `table` (ML, MAP, Bayes, open) and checks
 /// the results.
 fn score(table: &EmbeddedTable, logits: &[f32; 3], os: f32) -> Result<u32, InferError> {
@@ -124,6 +163,11 @@ fn score(table: &EmbeddedTable, logits: &[f32; 3], os: f32) -> Result<u32, Infer
         failed += u32::from(!sane_at_most(&fast, os));
     }
     Ok(failed)
+}
+
+/// A NaN logit the optimiser cannot see.
+fn nan_input() -> [f32; 3] {
+    black_box([f32::NAN, 0.0, 0.0])
 }
 
 /// All checks; returns the number that failed.
@@ -178,6 +222,29 @@ fn run() -> u32 {
             Ok(f) => failed += f,
             Err(_) => failed += 1,
         }
+    }
+    // The same table with a map on every head, decoded at run time: every head after
+    // its map, one detection at a time and in batches.
+    let maps = match SmallMaps::from_bytes(black_box(SMALL_MAPS_BYTES)) {
+        Ok(t) => t,
+        Err(_) => return 102,
+    };
+    for (logits, os) in &inputs {
+        match score_mapped(&maps, &small, logits, *os) {
+            Ok(f) => failed += f,
+            Err(_) => failed += 1,
+        }
+    }
+    failed += u32::from(maps.open(&nan_input(), 1.0).is_ok());
+    failed += u32::from(SmallOpen::from_bytes(black_box(SMALL_MAPS_BYTES)).is_ok());
+    {
+        let logits: [[f32; 3]; 4] = black_box(inputs.map(|(l, _)| l));
+        let os: [f32; 4] = black_box(inputs.map(|(_, o)| o));
+        let mut out = [[0.0f32; 3]; 4];
+        failed += u32::from(maps.ml_batch(&logits, Some(&os), &mut out).is_err());
+        failed += u32::from(maps.map_batch(&logits, Some(&os), &mut out).is_err());
+        failed += u32::from(maps.bayes_batch(&logits, Some(&os), &mut out).is_err());
+        failed += u32::from(maps.open_batch(&logits, Some(&os), &mut out).is_err());
     }
     // Far outside every Bayes axis the unknown category outweighs the known ones: the
     // open head's scores are far below the objectness.

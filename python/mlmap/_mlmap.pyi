@@ -108,7 +108,8 @@ class Table:
         A class index outside `0 .. K-1`, or the head `"bayes"` or `"open"` (no
         per-class histogram), raises `ValueError`."""
     def ml(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
-        """`(N, K)` ML scores; each row sums to its objectness."""
+        """`(N, K)` ML scores; each row sums to its objectness (before the head's
+        recalibration map, if the table holds one: see `recal_map`)."""
     def map(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` MAP scores; each row sums to its objectness."""
     def bayes(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
@@ -124,6 +125,14 @@ class Table:
         self, head: HeadName, logits: Logits, objectness: Objectness = None
     ) -> npt.NDArray[np.float32]:
         """The scores of `head`, as `ml`."""
+    def recal_map(self, head: HeadName) -> Optional[List[Tuple[float, float]]]:
+        """The recalibration map of `head` as its knots `(x, y)`, or `None` when the
+        table holds none for it. Every scoring method applies it: the head's top
+        score `t` becomes `g(t)` and the other scores keep their ratios to it (a row
+        then no longer sums to its objectness)."""
+    def without_maps(self) -> "Table":
+        """The same table without recalibration maps: every head's own scores. A
+        quantized section is not kept."""
     def __eq__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
     def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
@@ -201,6 +210,7 @@ def tune(
     edges: Literal["linspace", "matlab"] = "linspace",
     tail: Literal["zero", "clamp"] = "zero",
     top: int = 5,
+    maps: bool = True,
 ) -> Tuple[Table, Dict[str, Any]]:
     """Searches bins (default 4..40 per head) and lambdas on `val=(logits, labels[,
     objectness])`; returns the table and the report of `mlmap tune --format json`.
@@ -210,7 +220,10 @@ def tune(
     validation rows as never-seen objects; `background` takes more training rows as
     background, as in `fit`. Bin counts outside `1 .. 65535`, `lambdas_per_decade`
     outside `1 .. 1000`, a negative `top` and a grid of too many candidates raise
-    `ValueError`."""
+    `ValueError`. `maps=True` fits a recalibration map per head, kept where it lowers
+    the cross-fitted ECE within the guards; the report's `"maps"` gives each head's
+    verdict (`kept`, `cv_ece_without`, `cv_ece_with`, `within_guards`, `knots`).
+    `maps=False` fits none and the report has no `"maps"`."""
 
 @final
 class FitStats:

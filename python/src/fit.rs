@@ -700,6 +700,10 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
 /// on the labelled validation rows and its `epsilon` searched on the grid of `mlmap
 /// tune`; the report's `"open"` candidates and its `validation.methods.open` carry
 /// both. `background` takes more training rows as background, as in `mlmap.fit`.
+/// `maps=True` (the default) fits a recalibration map per head (DESIGN §1.9), kept
+/// where it lowers the cross-fitted ECE within the guards; the report's `"maps"` gives
+/// each head's verdict (`kept`, `cv_ece_without`, `cv_ece_with`, `within_guards`,
+/// `knots`), as `mlmap tune --format json`. `maps=False` is `mlmap tune --no-maps`.
 #[pyfunction]
 #[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, background=None,
                     classes=None,
@@ -707,14 +711,15 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
                     bayes=true, lambda_min=1e-8, lambda_max=1.0,
                     lambdas_per_decade=Count::new(3),
                     lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
-                    max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5)),
+                    max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5),
+                    maps=true),
     text_signature = "(logits, labels, val, objectness=None, *, ood=None, background=None, \
                       classes=None, \
                       objective='ece', bins_ml=None, bins_map=None, bins_bayes=None, \
                       bayes=True, lambda_min=1e-8, lambda_max=1.0, lambdas_per_decade=3, \
                       lambda_bayes_min=None, lambda_bayes_max=None, \
                       max_accuracy_loss=0.005, max_map_loss=0.01, edges='linspace', \
-                      tail='zero', top=5)")]
+                      tail='zero', top=5, maps=True)")]
 #[allow(clippy::too_many_arguments)]
 pub fn tune<'py>(
     py: Python<'py>,
@@ -740,6 +745,7 @@ pub fn tune<'py>(
     edges: &str,
     tail: &str,
     top: Count,
+    maps: bool,
 ) -> PyResult<(PyTable, Bound<'py, PyDict>)> {
     let grid = |b: Option<Vec<Count>>, what: &str| -> PyResult<Vec<usize>> {
         let Some(b) = b else {
@@ -806,6 +812,7 @@ pub fn tune<'py>(
         edges: EdgeMode::from_name(edges).map_err(|e| value_error(e.to_string()))?,
         tail: UpperTail::from_name(tail).map_err(|e| value_error(e.to_string()))?,
         detail: top,
+        maps,
     };
     params.check_size().map_err(value_error)?;
     let held = Held::new(logits, labels, objectness, classes, background)?;
@@ -935,5 +942,23 @@ fn tune_report<'py>(
     v.set_item("methods", methods)?;
     v.set_item("best", c.best.map(|m| m.name()))?;
     out.set_item("validation", v)?;
+    if params.maps {
+        let maps = PyDict::new(py);
+        for m in &tuned.maps {
+            let d = PyDict::new(py);
+            d.set_item("kept", m.kept)?;
+            d.set_item(
+                "cv_ece_without",
+                Some(m.ece_without).filter(|v| v.is_finite()),
+            )?;
+            d.set_item("cv_ece_with", Some(m.ece_with).filter(|v| v.is_finite()))?;
+            d.set_item("within_guards", m.excess == 0.0)?;
+            // Lists `[x, y]`, as the JSON report has them.
+            let knots: Vec<[f32; 2]> = m.knots.iter().map(|k| [k.x, k.y]).collect();
+            d.set_item("knots", knots)?;
+            maps.set_item(m.head.name(), d)?;
+        }
+        out.set_item("maps", maps)?;
+    }
     Ok(out)
 }

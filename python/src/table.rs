@@ -292,6 +292,25 @@ impl PyTable {
         Ok(Some(d))
     }
 
+    /// The recalibration map of `head` (`"ml"`, `"map"`, `"bayes"` or `"open"`,
+    /// DESIGN §1.9) as its knots, a list of `(x, y)` (`f32` values, `x` from 0 to 1),
+    /// or `None` when the table holds no map for that head. Every scoring method
+    /// applies it: the head's top score `t` becomes `g(t)`, the other scores keep
+    /// their ratios to it.
+    fn recal_map(&self, head: &str) -> PyResult<Option<Vec<(f32, f32)>>> {
+        let head = parse_head(head)?;
+        Ok(self
+            .table
+            .recal_map(head)
+            .map(|g| g.knots().iter().map(|k| (k.x, k.y)).collect()))
+    }
+
+    /// The same table without its recalibration maps: every head's own scores (the
+    /// ones `mlmap.tune` fits the maps to). A quantized section is not kept.
+    fn without_maps(&self) -> PyResult<Self> {
+        Self::new(self.table.clone().without_maps())
+    }
+
     /// The histogram of `head` (`"ml"` or `"map"`) for class `cls` (an index or a
     /// name): `(edges, frequencies)`, `B + 1` edges as the layer computes them (`f32`)
     /// and `B` frequencies. The Bayes and open heads have no per-class histogram: they
@@ -331,7 +350,8 @@ impl PyTable {
 
     /// ML scores of every row: `logits` is `(N, K)` float32 or float64 (any order),
     /// `objectness` `None` (1.0), a number or an `(N,)` array in `[0, 1]`. Returns
-    /// `(N, K)` float32, each row summing to its objectness.
+    /// `(N, K)` float32, each row summing to its objectness (before the head's
+    /// recalibration map, if the table holds one: see `recal_map`).
     #[pyo3(signature = (logits, objectness=None))]
     fn ml<'py>(
         &self,
