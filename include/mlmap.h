@@ -63,8 +63,8 @@
 
 /** Bytes of ::mlmap_table_t: an upper bound of what the library uses. */
 #define MLMAP_TABLE_SIZE \
-  ((((size_t)1288 + (size_t)MLMAP_MAX_CLASSES * (160 + 8 * (size_t)MLMAP_MAX_BINS) + \
-     ((size_t)MLMAP_MAX_CLASSES + 1) * (16 + 4 * (size_t)MLMAP_MAX_CLASSES * \
+  ((((size_t)1320 + (size_t)MLMAP_MAX_CLASSES * (160 + 8 * (size_t)MLMAP_MAX_BINS) + \
+     ((size_t)MLMAP_MAX_CLASSES + 1) * (16 + 4 * ((size_t)MLMAP_MAX_CLASSES + 1) * \
      (size_t)MLMAP_MAX_BINS_BAYES)) + 7) / 8 * 8)
 
 /**

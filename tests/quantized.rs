@@ -232,10 +232,9 @@ fn int8_maps_equal_f32_layer_for_every_code() {
 /// for bit as the f32 heads.
 #[test]
 fn int8_objectness_feature_equals_f32_layer_for_every_code() {
-    let t = Table::<3, 4, 2, 4, 4, 0, 1>::from_bytes(include_bytes!(
-        "golden/layer/small_osf.mlmap"
-    ))
-    .unwrap();
+    let t =
+        Table::<3, 4, 2, 4, 4, 0, 1>::from_bytes(include_bytes!("golden/layer/small_osf.mlmap"))
+            .unwrap();
     int8_everywhere(&t);
     // Every objectness bin, both ends and the clamp.
     let (scales, zps) = ([0.05f32; 3], [0i32; 3]);

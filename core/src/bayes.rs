@@ -232,13 +232,20 @@ impl<'a> BayesView<'a> {
     }
 }
 
+/// `z` clamped into `[axis.lo, axis.hi]` (`max` then `min`: no panic path, unlike
+/// `f32::clamp`, and an axis always has `lo < hi`).
+#[inline(always)]
+pub(crate) fn clamp_to_axis(z: f32, axis: &Axis) -> f32 {
+    z.max(axis.lo).min(axis.hi)
+}
+
 /// Adds the objectness feature's row of terms for `objectness` to the log-scores `l`:
 /// the bin of the objectness logit clamped into `axis` (every objectness in `[0, 1]`
 /// has one). Shared by [`BayesView`] and the quantized table.
 #[inline(always)]
 pub(crate) fn add_objectness_row(axis: &Axis, terms: &[f32], objectness: f32, l: &mut [f32]) {
     let cats = l.len();
-    let z = objectness_logit(objectness).clamp(axis.lo, axis.hi);
+    let z = clamp_to_axis(objectness_logit(objectness), axis);
     let row = axis
         .bin(z)
         .and_then(|bin| terms.get(bin * cats..(bin + 1) * cats));

@@ -869,7 +869,7 @@ impl<'a> QView<'_, 'a> {
         }
         // The objectness feature last, as the f32 head adds it.
         if let Some((axis, terms)) = &self.meta.objectness {
-            let z = bayes::objectness_logit(objectness).clamp(axis.lo, axis.hi);
+            let z = bayes::clamp_to_axis(bayes::objectness_logit(objectness), axis);
             let row = axis.bin(z).and_then(|b| {
                 let at = b.checked_mul(cats)?;
                 terms.get(at..at.checked_add(cats)?)

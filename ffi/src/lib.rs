@@ -55,6 +55,7 @@ type Inner = BoundedTable<
     MAX_BINS_BAYES,
     MAX_CATEGORIES,
     { mlmap::MAX_KNOTS },
+    1,
 >;
 
 /// The view scoring runs on.
@@ -73,11 +74,13 @@ const TAG: u64 = u64::from_le_bytes(*b"MLMPtab1");
 
 /// `MLMAP_TABLE_SIZE` of the header, in 8-byte words: an upper bound of the size of
 /// [`Storage`] for any maximum shape (the header computes the same formula, and the
-/// assertion below checks the bound at compile time). 1288 bytes of it are the fixed
-/// part: 256, and room for a recalibration map of `MAX_KNOTS` knots per head (4 * 32
-/// knots of 8 bytes, 4 lengths, padding).
+/// assertion below checks the bound at compile time). 1320 bytes of it are the fixed
+/// part: 256, room for a recalibration map of `MAX_KNOTS` knots per head (4 * 32 knots
+/// of 8 bytes, 4 lengths, padding) and the objectness feature's axis and flag; the
+/// Bayes head's categories hold `classes + 1` logits' terms (the K logits and the
+/// objectness feature).
 const fn table_words(classes: usize, bins: usize, bins_bayes: usize) -> usize {
-    (1288 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * classes * bins_bayes))
+    (1320 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * (classes + 1) * bins_bayes))
         .div_ceil(8)
 }
 

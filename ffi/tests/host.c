@@ -1015,14 +1015,14 @@ static void test_map_errors(const uint8_t *bytes, size_t len) {
  * underflow: only the mapped top is compared then (tests/maps.rs does the same). */
 static void test_maps_golden(const char *path, const mlmap_table_t *maps_t,
                              const mlmap_table_t *maps_nb_t, const mlmap_table_t *raw_t,
-                             const mlmap_table_t *raw_nb_t) {
+                             const mlmap_table_t *raw_nb_t, const mlmap_table_t *osf_t) {
     static const one_fn one[4] = {mlmap_ml, mlmap_map, mlmap_bayes, mlmap_open};
     static const batch_fn batch[4] = {mlmap_ml_batch, mlmap_map_batch, mlmap_bayes_batch,
                                      mlmap_open_batch};
     static const char *const head_names[4] = {"ml", "map", "bayes", "open"};
     size_t len;
     char *text = (char *)read_file(path, &len), *save = NULL, *f[24];
-    unsigned rows[2] = {0}, bad_status = 0, far = 0, batch_diff = 0, order = 0, compared = 0;
+    unsigned rows[3] = {0}, bad_status = 0, far = 0, batch_diff = 0, order = 0, compared = 0;
     unsigned top_only = 0;
     double worst = 0.0;
     for (char *line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
@@ -1031,6 +1031,7 @@ static void test_maps_golden(const char *path, const mlmap_table_t *maps_t,
         int which = n != 19                                   ? -1
                     : strcmp(f[0], "small_maps") == 0         ? 0
                     : strcmp(f[0], "small_maps_nobayes") == 0 ? 1
+                    : strcmp(f[0], "small_osf") == 0          ? 2
                                                               : -1;
         if (which < 0) {
             fprintf(stderr, "%s: unexpected line (%d fields, table %s)\n", path, n, f[0]);
@@ -1038,8 +1039,10 @@ static void test_maps_golden(const char *path, const mlmap_table_t *maps_t,
             continue;
         }
         rows[which]++;
-        const mlmap_table_t *t = which == 0 ? maps_t : maps_nb_t;
-        const mlmap_table_t *raw = which == 0 ? raw_t : raw_nb_t;
+        /* small_osf: the objectness feature (section 1.6) and no map, so its own scores
+         * are the raw ones. */
+        const mlmap_table_t *t = which == 0 ? maps_t : which == 1 ? maps_nb_t : osf_t;
+        const mlmap_table_t *raw = which == 0 ? raw_t : which == 1 ? raw_nb_t : osf_t;
         float os = strtof(f[2], NULL), x[3];
         for (int i = 0; i < 3; i++) x[i] = strtof(f[3 + i], NULL);
         mlmap_status_t want_err = MLMAP_OK;
@@ -1113,7 +1116,7 @@ static void test_maps_golden(const char *path, const mlmap_table_t *maps_t,
             "-- maps against the reference: %u head scores compared (%u by the top only), "
             "worst score error %.3g\n",
             compared, top_only, worst);
-    CHECK(rows[0] >= 40 && rows[1] >= 20);
+    CHECK(rows[0] >= 40 && rows[1] >= 20 && rows[2] >= 40);
     CHECK(compared >= 200);
     CHECK(bad_status == 0);
     CHECK(far == 0);
@@ -1255,7 +1258,14 @@ int main(int argc, char **argv) {
     test_head_arguments(&maps_t, mlmap_open, mlmap_open_batch, "open with a map");
     test_outputs_in_table(&maps_t);
     snprintf(path, sizeof path, "%s/maps.csv", argv[5]);
-    test_maps_golden(path, &maps_t, &maps_nb_t, &open_t, &small_t);
+    size_t osf_len;
+    snprintf(path, sizeof path, "%s/small_osf.mlmap", argv[5]);
+    uint8_t *osf_bytes = read_file(path, &osf_len);
+    static mlmap_table_t osf_t;
+    CHECK(osf_bytes[4] == 4);
+    EXPECT(mlmap_table_decode(&osf_t, sizeof osf_t, osf_bytes, osf_len), MLMAP_OK);
+    snprintf(path, sizeof path, "%s/maps.csv", argv[5]);
+    test_maps_golden(path, &maps_t, &maps_nb_t, &open_t, &small_t, &osf_t);
     test_map_errors(maps_bytes, maps_len);
 
     free(bytes);
@@ -1265,6 +1275,7 @@ int main(int argc, char **argv) {
     free(nobg_bytes);
     free(maps_bytes);
     free(maps_nb_bytes);
+    free(osf_bytes);
     printf("%u passed, %u failed\n", passed, failed);
     return failed ? 1 : 0;
 }

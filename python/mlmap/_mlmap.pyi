@@ -211,6 +211,7 @@ def tune(
     tail: Literal["zero", "clamp"] = "zero",
     top: int = 5,
     maps: bool = True,
+    objectness_feature: bool = False,
 ) -> Tuple[Table, Dict[str, Any]]:
     """Searches bins (default 4..40 per head) and lambdas on `val=(logits, labels[,
     objectness])`; returns the table and the report of `mlmap tune --format json`.

@@ -100,6 +100,7 @@ impl BayesArg {
     const DEFAULT: Self = Self(Some(BayesParams {
         bins: 22,
         lambda: 1e-3,
+        objectness: false,
     }));
 }
 
@@ -115,7 +116,8 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BayesArg {
         }
         let d = b.cast::<PyDict>().map_err(|_| {
             PyTypeError::new_err(
-                "bayes: expected True, False, None or a dict {\"bins\": .., \"lambda\": ..}",
+                "bayes: expected True, False, None or a dict {\"bins\": .., \"lambda\": .., \
+                 \"objectness\": ..}",
             )
         })?;
         let mut p = BayesParams::default();
@@ -123,9 +125,18 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BayesArg {
             match key.extract::<String>()?.as_str() {
                 "bins" => p.bins = bins(&value.extract::<Count>()?, "bins_bayes")?,
                 "lambda" => p.lambda = value.extract::<f64>()? as f32,
+                "objectness" => {
+                    p.objectness = value
+                        .cast::<PyBool>()
+                        .map_err(|_| {
+                            PyTypeError::new_err("bayes: \"objectness\" must be True or False")
+                        })?
+                        .is_true();
+                }
                 other => {
                     return Err(value_error(format!(
-                        "bayes: unknown key {other:?}; expected \"bins\" and \"lambda\""
+                        "bayes: unknown key {other:?}; expected \"bins\", \"lambda\" and \
+                         \"objectness\""
                     )))
                 }
             }
@@ -418,6 +429,11 @@ pub fn fit<'py>(
     let held = Held::new(logits, labels, objectness, classes, background)?;
     let src = held.sources()?;
     let table = py.detach(|| -> PyResult<DynTable> {
+        // The objectness feature needs the rows (DESIGN §1.6): the in-memory fit.
+        if p.bayes.is_some_and(|b| b.objectness) {
+            let train = TrainingSet::read(&Chained(&src)).map_err(|e| fit_error(&e))?;
+            return train.fit(&p).map_err(|e| fit_error(&e));
+        }
         let stats = stats_of(&src).map_err(|e| fit_error(&e))?;
         let edges = stats.edges(&p).map_err(|e| fit_error(&e))?;
         let counts = counts_of(&src, &edges)?;
@@ -702,8 +718,9 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
 /// both. `background` takes more training rows as background, as in `mlmap.fit`.
 /// `maps=True` (the default) fits a recalibration map per head (DESIGN §1.9), kept
 /// where it lowers the cross-fitted ECE within the guards; the report's `"maps"` gives
-/// each head's verdict (`kept`, `cv_ece_without`, `cv_ece_with`, `within_guards`,
-/// `knots`), as `mlmap tune --format json`. `maps=False` is `mlmap tune --no-maps`.
+/// each head's verdict (`kept`, `cv_ece_without`, `cv_ece_with`, `within_guards`, `adds_no_loss`,
+/// `knots`), as `mlmap tune --format json`. `maps=False` is `mlmap tune --no-maps`;
+/// `objectness_feature=True` is `mlmap tune --objectness-feature` (DESIGN §1.6).
 #[pyfunction]
 #[pyo3(signature = (logits, labels, val, objectness=None, *, ood=None, background=None,
                     classes=None,
@@ -712,14 +729,14 @@ pub fn finish(stats: &PyFitStats, counts: &Bound<'_, PyFitCounts>) -> PyResult<P
                     lambdas_per_decade=Count::new(3),
                     lambda_bayes_min=None, lambda_bayes_max=None, max_accuracy_loss=0.005,
                     max_map_loss=0.01, edges="linspace", tail="zero", top=Count::new(5),
-                    maps=true),
+                    maps=true, objectness_feature=false),
     text_signature = "(logits, labels, val, objectness=None, *, ood=None, background=None, \
                       classes=None, \
                       objective='ece', bins_ml=None, bins_map=None, bins_bayes=None, \
                       bayes=True, lambda_min=1e-8, lambda_max=1.0, lambdas_per_decade=3, \
                       lambda_bayes_min=None, lambda_bayes_max=None, \
                       max_accuracy_loss=0.005, max_map_loss=0.01, edges='linspace', \
-                      tail='zero', top=5, maps=True)")]
+                      tail='zero', top=5, maps=True, objectness_feature=False)")]
 #[allow(clippy::too_many_arguments)]
 pub fn tune<'py>(
     py: Python<'py>,
@@ -746,6 +763,7 @@ pub fn tune<'py>(
     tail: &str,
     top: Count,
     maps: bool,
+    objectness_feature: bool,
 ) -> PyResult<(PyTable, Bound<'py, PyDict>)> {
     let grid = |b: Option<Vec<Count>>, what: &str| -> PyResult<Vec<usize>> {
         let Some(b) = b else {
@@ -785,6 +803,7 @@ pub fn tune<'py>(
         Some(BayesGrid {
             bins: grid(bins_bayes, "bins_bayes")?,
             lambdas,
+            objectness: objectness_feature,
         })
     } else {
         None
@@ -953,6 +972,7 @@ fn tune_report<'py>(
             )?;
             d.set_item("cv_ece_with", Some(m.ece_with).filter(|v| v.is_finite()))?;
             d.set_item("within_guards", m.excess == 0.0)?;
+            d.set_item("adds_no_loss", m.excess <= m.excess_without)?;
             // Lists `[x, y]`, as the JSON report has them.
             let knots: Vec<[f32; 2]> = m.knots.iter().map(|k| [k.x, k.y]).collect();
             d.set_item("knots", knots)?;

@@ -99,12 +99,13 @@ def test_tune_maps_keyword(data):
     table, report = mlmap.tune(*args, **grid)
     assert set(report["maps"]) == set(table.heads)
     for head, v in report["maps"].items():
-        assert set(v) == {"kept", "cv_ece_without", "cv_ece_with", "within_guards", "knots"}
+        assert set(v) == {"kept", "cv_ece_without", "cv_ece_with", "within_guards",
+                          "adds_no_loss", "knots"}
         knots = [tuple(k) for k in v["knots"]]
         assert 2 <= len(knots) <= 32
         kept = v["kept"]
         if kept:
-            assert v["within_guards"] and v["cv_ece_with"] < v["cv_ece_without"]
+            assert v["adds_no_loss"] and v["cv_ece_with"] < v["cv_ece_without"]
             assert table.recal_map(head) == knots
         else:
             assert table.recal_map(head) is None

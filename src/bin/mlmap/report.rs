@@ -579,10 +579,15 @@ pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
         Some(b) => {
             let _ = writeln!(
                 s,
-                "  Bayes {:>3} bins, lambda {:e}, {} categories",
+                "  Bayes {:>3} bins, lambda {:e}, {} categories{}",
                 b.bins(),
                 b.lambda(),
-                b.categories()
+                b.categories(),
+                if b.objectness_axis().is_some() {
+                    ", objectness feature"
+                } else {
+                    ""
+                }
             );
         }
         None => {

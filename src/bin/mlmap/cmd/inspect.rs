@@ -137,6 +137,37 @@ fn bayes_text(s: &mut String, b: &BayesView<'_>, names: &[&str], bins: bool) {
             }
         }
     }
+    if let Some(axis) = b.objectness_axis() {
+        let _ = writeln!(
+            s,
+            "objectness feature (DESIGN §1.6): the objectness logit ln(OS) - ln(1 - OS), \
+             clamped into [{:.4}, {:.4}]",
+            axis.lo(),
+            axis.hi()
+        );
+        for c in 0..b.categories() {
+            let freqs = objectness_frequencies(b, c);
+            let _ = writeln!(
+                s,
+                "  {:<12} {:<12} |{}|",
+                category_name(names, c),
+                "objectness",
+                sparkline(&freqs)
+            );
+        }
+    }
+}
+
+/// The frequencies of category `c`'s histogram of the objectness logit:
+/// `exp(term) - lambda` of each bin (the feature's terms are bin-major, then category).
+fn objectness_frequencies(b: &BayesView<'_>, c: usize) -> Vec<f32> {
+    let cats = b.categories();
+    b.objectness_terms()
+        .iter()
+        .skip(c)
+        .step_by(cats.max(1))
+        .map(|&t| (t.exp() - b.lambda()).max(0.0))
+        .collect()
 }
 
 /// The Bayes head in JSON.
@@ -173,6 +204,13 @@ fn bayes_json(b: &BayesView<'_>, names: &[&str]) -> serde_json::Value {
         "background": b.has_background(),
         "axes": axes,
         "categories": categories,
+        "objectness_feature": b.objectness_axis().map(|a| {
+            let edges: Vec<f32> = (0..=a.bins()).map(|k| a.edge(k)).collect();
+            let freqs: Vec<Vec<f32>> = (0..b.categories())
+                .map(|c| objectness_frequencies(b, c))
+                .collect();
+            serde_json::json!({ "edges": edges, "frequencies": freqs })
+        }),
     })
 }
 
@@ -368,7 +406,8 @@ const HEADS: [Head; 4] = [Head::Ml, Head::Map, Head::Bayes, Head::Open];
 /// The format version the table is written in (DESIGN §3): 4 with a recalibration
 /// map, 3 with the open head, 2 with the Bayes head only, 1 otherwise.
 fn file_version(t: &DynTable) -> u16 {
-    if HEADS.iter().any(|&h| t.recal_map(h).is_some()) {
+    let feature = t.bayes().is_some_and(|b| b.objectness_axis().is_some());
+    if feature || HEADS.iter().any(|&h| t.recal_map(h).is_some()) {
         return 4;
     }
     match (t.bayes().is_some(), t.open().is_some()) {
