@@ -82,7 +82,7 @@ section "link without panic paths: default backend (libm)"
 cargo build --release
 check_binary "nostd-check (libm)" target/release/mlmap-nostd-check
 
-section "link without panic paths: --features micromath (FastMath)"
+section "link without panic paths: --features micromath (Micromath)"
 cargo build --release --features micromath --target-dir target/micromath
 check_binary "nostd-check (micromath)" target/micromath/release/mlmap-nostd-check
 

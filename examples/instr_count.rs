@@ -64,7 +64,7 @@ fn main() -> ExitCode {
         "map" => |t, x, o| t.map(x, o),
         "map_fast" => |t, x, o| t.map_with::<FastMath>(x, o),
         "map_micromath" => |t, x, o| t.map_with::<Micromath>(x, o),
-        "bayes" => |t, x, o| t.bayes(x, o),
+        "bayes" => |t, x, o| t.bayes_with::<Libm>(x, o),
         "bayes_fast" => |t, x, o| t.bayes_with::<FastMath>(x, o),
         "open" | "open_eps" => |t, x, o| t.open(x, o),
         "decode" => {

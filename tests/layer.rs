@@ -1071,7 +1071,7 @@ mod bayes {
     use mlmap::FastMath;
 
     use super::*;
-    use crate::support::SHIPPED_MLMAP;
+    use crate::support::{SHIPPED_MLMAP, TEST_SPLIT_CSV};
 
     /// The logits and objectness of every row of the shipped test split.
     fn test_rows() -> (Vec<[f32; 3]>, Vec<f32>) {
@@ -1091,21 +1091,75 @@ mod bayes {
         (xs, os)
     }
 
+    /// Every front of the layer (the fixed-size table, the run-time shaped one, the
+    /// batch API) against the numpy reference on the sampled rows of the test split:
+    /// ML, MAP and Bayes (`FastMath`) within `GOLDEN_ABS_TOL`.
     #[test]
-    fn table_dyn_table_and_batch_agree_bit_for_bit_on_the_test_split() {
+    fn every_front_matches_the_numpy_reference_on_the_test_split() {
         let t = shipped();
         let d = DynTable::from_bytes(SHIPPED_MLMAP).unwrap();
+        let golden = goldens(TEST_SPLIT_CSV);
+        assert_eq!(golden.len(), 500);
+        let xs: Vec<[f32; 3]> = golden.iter().map(|g| g.logits).collect();
+        let os: Vec<f32> = golden.iter().map(|g| g.objectness).collect();
+        let mut batch = [
+            vec![[0.0f32; 3]; xs.len()],
+            vec![[0.0f32; 3]; xs.len()],
+            vec![[0.0f32; 3]; xs.len()],
+        ];
+        t.ml_batch(&xs, Some(&os), &mut batch[0]).unwrap();
+        t.map_batch(&xs, Some(&os), &mut batch[1]).unwrap();
+        t.bayes_batch(&xs, Some(&os), &mut batch[2]).unwrap();
+        let (mut out, mut scratch) = ([0.0f32; 3], [0.0f32; 4]);
+        let mut worst = [0.0f64; 3];
+        for (i, g) in golden.iter().enumerate() {
+            let (x, o) = (&g.logits, g.objectness);
+            let want = [g.ml.unwrap(), g.map.unwrap(), g.bayes.unwrap()];
+            let mut fronts: Vec<(&str, usize, [f32; 3])> = vec![
+                ("Table::ml", 0, t.ml(x, o).unwrap().0),
+                ("Table::map", 1, t.map(x, o).unwrap().0),
+                ("Table::bayes", 2, t.bayes(x, o).unwrap().0),
+            ];
+            for (h, b) in batch.iter().enumerate() {
+                fronts.push(("batch", h, b[i]));
+            }
+            d.ml_into(x, o, &mut out, &mut [0.0; 3]).unwrap();
+            fronts.push(("DynTable::ml_into", 0, out));
+            d.map_into::<Libm>(x, o, &mut out, &mut [0.0; 3]).unwrap();
+            fronts.push(("DynTable::map_into", 1, out));
+            d.bayes_into::<FastMath>(x, o, &mut out, &mut scratch)
+                .unwrap();
+            fronts.push(("DynTable::bayes_into", 2, out));
+            for (front, head, got) in fronts {
+                for (&s, &w) in got.iter().zip(&want[head]) {
+                    let err = (f64::from(s) - w).abs();
+                    worst[head] = worst[head].max(err);
+                    assert!(
+                        err <= GOLDEN_ABS_TOL,
+                        "{front}, {}: got {got:?}, want {:?}",
+                        g.case,
+                        want[head]
+                    );
+                }
+            }
+        }
+        eprintln!(
+            "test split, worst score error ML {:e}, MAP {:e}, Bayes {:e}",
+            worst[0], worst[1], worst[2]
+        );
+    }
+
+    /// The batch API gives the bits of one call per row, on every row of the test split.
+    #[test]
+    fn the_batch_gives_the_bits_of_single_calls_on_the_test_split() {
+        let t = shipped();
         let (xs, os) = test_rows();
         assert_eq!(xs.len(), 10_000);
         let mut batch = vec![[0.0f32; 3]; xs.len()];
         t.bayes_batch(&xs, Some(&os), &mut batch).unwrap();
-        let (mut out, mut scratch) = ([0.0f32; 3], [0.0f32; 4]);
         let mut distinct = std::collections::HashSet::new();
         for ((x, &o), row) in xs.iter().zip(&os).zip(&batch) {
             let s = t.bayes(x, o).unwrap().0;
-            d.bayes_into::<FastMath>(x, o, &mut out, &mut scratch)
-                .unwrap();
-            assert_eq!(out.map(f32::to_bits), s.map(f32::to_bits), "{x:?} {o}");
             assert_eq!(row.map(f32::to_bits), s.map(f32::to_bits), "{x:?} {o}");
             distinct.insert(s.map(f32::to_bits));
         }

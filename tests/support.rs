@@ -12,7 +12,8 @@
 use mlmap::{ClassSpec, EdgeMode, InferError, Settings, Table, UpperTail};
 
 /// Largest absolute difference allowed between a score computed by the layer in `f32`
-/// with the default `Libm` backend and the float64 reference.
+/// and the float64 reference, with `Libm` or with `FastMath` (whose `exp` is within
+/// `FAST_MATH_MAX_REL_ERROR`, 2.3e-7, of `exp`: the Bayes and open heads' default).
 pub const GOLDEN_ABS_TOL: f64 = 1e-6;
 
 /// Shape of the hand-checkable table: 3 classes, 4 ML bins, 2 MAP bins.
@@ -38,6 +39,9 @@ pub const SHIPPED_MLMAP: &[u8] = include_bytes!("../tables/default.mlmap");
 pub const SMALL_CSV: &str = include_str!("golden/layer/small.csv");
 /// Golden scores of the shipped table for random logit vectors.
 pub const SHIPPED_CSV: &str = include_str!("golden/layer/default.csv");
+/// Golden scores of the shipped table for every 20th row of `examples/data/test.csv`
+/// (the case column holds the row's id).
+pub const TEST_SPLIT_CSV: &str = include_str!("golden/layer/test_split.csv");
 
 pub fn small() -> Small {
     Small::from_bytes(SMALL_MLMAP).expect("small.mlmap is valid")

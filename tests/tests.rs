@@ -3,8 +3,9 @@
 /// Tolerances, golden files of the numpy reference, and a raw `.mlmap` writer.
 mod support;
 
-/// The layer against the numpy goldens, error cases, the batch API, ties, the exact
-/// `OS / K` answer, the embedded table, `DynTable` agreement and the fast-math bound.
+/// The layer against the numpy goldens (every front: fixed-size table, `DynTable`, batch),
+/// error cases, the batch API, ties, the exact `OS / K` answer, the embedded table and the
+/// fast-math bound.
 mod layer;
 
 /// The `.mlmap` format: exact round trips, the reference encoder's bytes, every
@@ -15,7 +16,8 @@ mod format;
 /// checked by the `mlmap::invariants` checkers that the fuzz targets share.
 mod invariants;
 
-/// The quantized table: bit-for-bit agreement with the f32 heads, size, malformed sections.
+/// The quantized table: its heads against the numpy goldens, bit-for-bit agreement with the
+/// f32 heads, size, malformed sections.
 mod quantized;
 
 /// Recalibration maps (DESIGN §1.9): every head after its map against the numpy

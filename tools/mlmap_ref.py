@@ -10,6 +10,12 @@ so agreement between the two is evidence for both. Used to write golden values
     python3 tools/mlmap_ref.py fit --objectness-feature examples/data/train.csv OUT.mlmap  # v4
     python3 tools/mlmap_ref.py goldens tests/golden/layer              # layer goldens
 
+`goldens` writes the small tables and the scores of every head: of hand-picked and random
+logits (small.csv, default.csv, open.csv), of the tables with recalibration maps or the
+objectness feature (maps.csv), of every 20th row of examples/data/test.csv with
+the shipped table (test_split.csv), and of quantized codes scored as their dequantized
+logits (quantized.csv).
+
 `fit` uses the defaults of `mlmap fit`: linspace edges, 22 ML bins (lambda 0.0055), 17 MAP
 bins (lambda 0.00012) and, unless --no-bayes, the Bayes head of docs/DESIGN.md section 1.6 with
 22 bins per logit and lambda 0.001, and the open head's parameters of an untuned table
@@ -895,6 +901,83 @@ def bayes_cases(t, n, seed):
     return cases
 
 
+# Every TEST_SPLIT_STEP-th row of examples/data/test.csv, scored with the shipped table:
+# the goldens of the layer's fronts (fixed-size table, run-time table, batch, the CLI).
+TEST_SPLIT_STEP = 20
+
+
+def test_split_cases(path, step=TEST_SPLIT_STEP):
+    """(case, logits, objectness) of every `step`-th row of a data CSV, case = its id."""
+    with open(path) as fh:
+        r = csv.DictReader(fh)
+        names = [c for c in r.fieldnames if c not in ("id", "label", "objectness")]
+        rows = list(r)[::step]
+    return [("id %s" % row["id"], [float(row[c]) for c in names], float(row["objectness"]))
+            for row in rows]
+
+
+# The quantized heads (docs/FORMAT.md, "The quantized section") score the dequantized
+# logit x = float32(float32(q - zero_point) * scale) of each code q. Per table: the
+# parameters (bits, scales, zero points) and the codes scored.
+QUANT_PARAMS = [
+    (8, [0.08, 0.08, 0.08], [0, 0, 0]),
+    (8, [0.05, 0.04, 0.06], [3, -7, 0]),
+    (8, [0.5, 0.5, 0.5], [-100, 20, 127]),
+    (16, [0.0004, 0.0003, 0.0005], [0, 1000, -2000]),
+]
+
+
+def dequantize(q, scale, zp):
+    """The dequantized logit of code q, in float32 as the format defines it."""
+    return float(np.float32(np.float32(q - zp) * np.float32(scale)))
+
+
+def quant_cases(bits, n, seed):
+    """n code vectors of a `bits`-bit table: the range ends, zero, and random codes."""
+    lo, hi = (-128, 127) if bits == 8 else (-32768, 32767)
+    rng = np.random.default_rng(seed)
+    fixed = [[lo, lo, lo], [hi, hi, hi], [0, 0, 0], [lo, 0, hi], [hi, lo, 0]]
+    rand = [list(rng.integers(lo, hi + 1, size=3)) for _ in range(n - len(fixed))]
+    out = []
+    for i, q in enumerate(fixed + rand):
+        r = rng.uniform()
+        os_ = 1.0 if r < 0.3 else (0.0 if r < 0.35 else rng.uniform())
+        out.append(([int(v) for v in q], float(np.float32(os_))))
+    return out
+
+
+def quant_rows(name, t, n, seed):
+    """One CSV row per (parameters, codes): every head the table has, scored by the
+    reference on the dequantized logits."""
+    k = t["k"]
+    rows = []
+    for p, (bits, scales, zps) in enumerate(QUANT_PARAMS):
+        for q, os_ in quant_cases(bits, n, seed + p):
+            x = [dequantize(v, s, z) for v, s, z in zip(q, scales, zps)]
+            scores = list(ml(t, x, os_)) + list(map_(t, x, os_))
+            scores += list(bayes(t, x, os_)) if t["bayes"] is not None else [None] * k
+            scores += list(open_(t, x, os_)) if t["open"] is not None else [None] * k
+            rows.append([name, str(bits)] + [fmt(np.float32(s)) for s in scales]
+                        + [str(z) for z in zps] + [str(v) for v in q] + [fmt(os_)]
+                        + ["" if s is None else fmt(s) for s in scores])
+    return rows
+
+
+def write_quant_csv(path, k, rows, regenerate):
+    head = ["table", "bits"] + ["scale%d" % i for i in range(k)] \
+        + ["zp%d" % i for i in range(k)] + ["q%d" % i for i in range(k)] + ["objectness"] \
+        + ["%s%d" % (h, i) for h in ("ml", "map", "bayes", "open") for i in range(k)]
+    with open(path, "w") as fh:
+        fh.write("# Expected scores (float64) of quantized codes from tools/mlmap_ref.py, "
+                 "numpy %s.\n" % np.__version__)
+        fh.write("# Regenerate: %s\n" % regenerate)
+        fh.write("# Each code q scores as the logit float32(float32(q - zp) * scale).\n")
+        fh.write("# bayes*, open*: empty for a table without that head.\n")
+        fh.write(",".join(head) + "\n")
+        for r in rows:
+            fh.write(",".join(r) + "\n")
+
+
 def goldens(outdir):
     import os
     os.makedirs(outdir, exist_ok=True)
@@ -947,6 +1030,14 @@ def goldens(outdir):
         open_table_rows += open_rows("default", t, cases)
     write_open_csv(os.path.join(outdir, "open.csv"), 3, open_table_rows, regen)
     write_maps_csv(os.path.join(outdir, "maps.csv"), 3, map_table_rows, regen)
+    split = test_split_cases(os.path.join(here, "..", "examples", "data", "test.csv"))
+    write_csv(os.path.join(outdir, "test_split.csv"), t["k"],
+              golden_rows("default", t, split), regen)
+    quant = quant_rows("default", t, 40, seed=4)
+    for name, data in files:
+        if name in ("small_clamp", "small_open", "small_open_nobg"):
+            quant += quant_rows(name, decode(data), 20, seed=5)
+    write_quant_csv(os.path.join(outdir, "quantized.csv"), 3, quant, regen)
     print("numpy %s: wrote %s" % (np.__version__, outdir))
 
 

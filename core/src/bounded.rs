@@ -161,8 +161,9 @@ pub struct BoundedTable<
     /// Log-terms in use: `bayes_categories * k * bayes_bins`.
     bayes_terms_len: usize,
     bayes_axes: [Axis; K],
-    /// The log-terms, category-major with the run-time shape: the first
-    /// `categories * k * bins` floats of the flattened array are in use.
+    /// The log-terms as one flat buffer (the array's shape only bounds its length): the
+    /// first `categories * k * bins` floats hold them logit-major (logit, bin, category),
+    /// as [`BayesView`] reads them.
     bayes_terms: [[[f32; B_BAYES]; K]; C],
     bayes_rows: [u64; C],
     bayes_log_prior: [f32; C],

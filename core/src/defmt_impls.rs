@@ -20,31 +20,27 @@ impl Format for Head {
     }
 }
 
+// Errors: each variant's `message()` (the text `Display` is built from), then its fields.
+
 impl Format for TableError {
     fn format(&self, f: Formatter<'_>) {
+        let m = self.message();
         match *self {
-            Self::Edges { head, class } => {
-                write!(f, "{} histogram of class {}: bad edges", head, class)
+            Self::Edges { head, class }
+            | Self::Frequencies { head, class }
+            | Self::BinCount { head, class } => {
+                write!(f, "{=str} ({} histogram of class {})", m, head, class)
             }
-            Self::Frequencies { head, class } => {
-                write!(f, "{} histogram of class {}: bad frequencies", head, class)
+            Self::Mean { class } | Self::Variance { class } | Self::DuplicateName { class } => {
+                write!(f, "{=str} (class {})", m, class)
             }
-            Self::BinCount { head, class } => {
-                write!(f, "{} histogram of class {}: wrong bin count", head, class)
+            Self::CategoryRows { class } => write!(f, "{=str} (category {})", m, class),
+            Self::Lambda { head } => write!(f, "{=str} ({})", m, head),
+            Self::Name { class, error } => write!(f, "{=str} (class {}: {})", m, class, error),
+            Self::ClassCount | Self::BayesShape | Self::Temperature | Self::Epsilon => {
+                write!(f, "{=str}", m)
             }
-            Self::Mean { class } => write!(f, "prior of class {}: bad mean", class),
-            Self::Variance { class } => write!(f, "prior of class {}: bad variance", class),
-            Self::Lambda { head } => write!(f, "{} lambda out of range", head),
-            Self::Name { class, error } => write!(f, "name of class {}: {}", class, error),
-            Self::DuplicateName { class } => write!(f, "name of class {} repeated", class),
-            Self::ClassCount => write!(f, "class count out of range"),
-            Self::CategoryRows { class } => write!(f, "Bayes category {} has no rows", class),
-            Self::BayesShape => write!(f, "Bayes head shape inconsistent"),
-            Self::Temperature => write!(f, "open head: temperature out of range"),
-            Self::Epsilon => write!(f, "open head: epsilon out of range"),
-            Self::Map { head, error } => {
-                write!(f, "recalibration map of the {} head: {}", head, error)
-            }
+            Self::Map { head, error } => write!(f, "{=str} ({} head: {})", m, head, error),
         }
     }
 }
@@ -75,47 +71,44 @@ impl Format for crate::RecalMap<'_> {
 
 impl Format for NameError {
     fn format(&self, f: Formatter<'_>) {
+        let m = self.message();
         match *self {
-            Self::Empty => write!(f, "empty"),
-            Self::TooLong => write!(f, "too long"),
-            Self::Reserved => write!(f, "reserved"),
             Self::Char { ch, at, kind } => {
-                write!(f, "{} U+{:04X} at byte {}", kind, u32::from(ch), at)
+                write!(
+                    f,
+                    "{=str} ({} U+{:04X} at byte {})",
+                    m,
+                    kind,
+                    u32::from(ch),
+                    at
+                )
             }
-            Self::Padded => write!(f, "starts or ends with a space"),
-            Self::Repeated { first } => write!(f, "repeats class {}", first),
+            Self::Repeated { first } => write!(f, "{=str} (class {})", m, first),
+            Self::Empty | Self::TooLong | Self::Reserved | Self::Padded => write!(f, "{=str}", m),
         }
     }
 }
 
 impl Format for CharKind {
     fn format(&self, f: Formatter<'_>) {
-        match self {
-            Self::Control => write!(f, "control character"),
-            Self::Invisible => write!(f, "invisible character"),
-            Self::Separator => write!(f, "separator"),
-            Self::PrivateUse => write!(f, "private-use character"),
-            Self::Noncharacter => write!(f, "noncharacter"),
-        }
+        write!(f, "{=str}", self.message())
     }
 }
 
 impl Format for DecodeError {
     fn format(&self, f: Formatter<'_>) {
+        let m = self.message();
         match *self {
-            Self::Truncated => write!(f, "Truncated"),
-            Self::NotATable => write!(f, "NotATable"),
-            Self::Corrupted => write!(f, "Corrupted"),
-            Self::UnsupportedVersion { found } => write!(f, "UnsupportedVersion({})", found),
+            Self::UnsupportedVersion { found } => write!(f, "{=str} (version {})", m, found),
             Self::ShapeMismatch { expected, found } => {
-                write!(f, "ShapeMismatch(expected {}, found {})", expected, found)
+                write!(f, "{=str} (expected {}, found {})", m, expected, found)
             }
             Self::BayesShapeMismatch { expected, found } => {
-                write!(
-                    f,
-                    "BayesShapeMismatch(expected {}, found {})",
-                    expected, found
-                )
+                write!(f, "{=str} (expected {}, found {})", m, expected, found)
+            }
+            Self::Invalid(e) => write!(f, "{=str}: {}", m, e),
+            Self::Truncated | Self::NotATable | Self::Corrupted | Self::Malformed => {
+                write!(f, "{=str}", m)
             }
             Self::MapCapacity {
                 head,
@@ -123,32 +116,32 @@ impl Format for DecodeError {
                 found,
             } => write!(
                 f,
-                "MapCapacity({} head: {} knots, room for {})",
-                head, found, capacity
+                "{=str} ({} head: {} knots, room for {})",
+                m, head, found, capacity
             ),
-            Self::ObjectnessMismatch { found } => write!(f, "ObjectnessMismatch(found {})", found),
-            Self::Malformed => write!(f, "Malformed"),
-            Self::Invalid(e) => write!(f, "Invalid({})", e),
+            Self::ObjectnessMismatch { found } => write!(f, "{=str} (found {})", m, found),
         }
     }
 }
 
 impl Format for EncodeError {
     fn format(&self, f: Formatter<'_>) {
-        write!(f, "BufferTooSmall")
+        write!(f, "{=str}", self.message())
     }
 }
 
 impl Format for InferError {
     fn format(&self, f: Formatter<'_>) {
+        let m = self.message();
         match *self {
-            Self::NanLogit { class } => write!(f, "NanLogit({})", class),
-            Self::Objectness => write!(f, "Objectness"),
-            Self::Length => write!(f, "Length"),
-            Self::Evidence => write!(f, "Evidence"),
-            Self::NoBayesHead => write!(f, "NoBayesHead"),
-            Self::NoOpenHead => write!(f, "NoOpenHead"),
-            Self::CodeRange { class } => write!(f, "CodeRange({})", class),
+            Self::NanLogit { class } | Self::CodeRange { class } => {
+                write!(f, "{=str} (class {})", m, class)
+            }
+            Self::Objectness
+            | Self::Length
+            | Self::Evidence
+            | Self::NoBayesHead
+            | Self::NoOpenHead => write!(f, "{=str}", m),
         }
     }
 }
@@ -156,8 +149,8 @@ impl Format for InferError {
 impl Format for BatchError {
     fn format(&self, f: Formatter<'_>) {
         match *self {
-            Self::LengthMismatch => write!(f, "LengthMismatch"),
-            Self::Row { index, error } => write!(f, "Row({}, {})", index, error),
+            Self::LengthMismatch => write!(f, "{=str}", self.message()),
+            Self::Row { index, error } => write!(f, "row {}: {}", index, error),
         }
     }
 }
@@ -331,6 +324,140 @@ impl Format for crate::QParams<'_> {
             f,
             "QParams(int{}, scales {=[?]}, zero points {=[?]}, Bayes {})",
             self.bits, self.scales, self.zero_points, self.bayes
+        )
+    }
+}
+
+impl Format for crate::OpenParams {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "OpenParams {{ temperature: {}, epsilon: {} }}",
+            self.temperature(),
+            self.epsilon()
+        )
+    }
+}
+
+impl Format for crate::Axis {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "Axis {{ [{}, {}], {} bins }}",
+            self.lo(),
+            self.hi(),
+            self.bins()
+        )
+    }
+}
+
+impl Format for crate::BayesView<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "BayesView {{ {} logits, {} categories, {} bins, lambda: {}, open: {} }}",
+            self.logits(),
+            self.categories(),
+            self.bins(),
+            self.lambda(),
+            self.open()
+        )
+    }
+}
+
+impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Format for crate::TableView<'_, F, G> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "TableView {{ {} classes, {} ML bins, {} MAP bins, {}, bayes: {} }}",
+            self.k(),
+            self.bins_ml(),
+            self.bins_map(),
+            self.settings(),
+            self.bayes()
+        )
+    }
+}
+
+impl<F: AsRef<[f32]>, G: AsRef<[f32]>> Format for crate::ClassSpec<'_, F, G> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "ClassSpec {{ name: {=str}, rows: {}, mean: {}, variance: {}, ML: [{}, {}] {=[?]}, \
+             MAP: [{}, {}] {=[?]} }}",
+            self.name,
+            self.rows,
+            self.mean,
+            self.variance,
+            self.ml_range.0,
+            self.ml_range.1,
+            self.ml_freqs.as_ref(),
+            self.map_range.0,
+            self.map_range.1,
+            self.map_freqs.as_ref()
+        )
+    }
+}
+
+impl<const N: usize> Format for crate::Bounded<N> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "Bounded<{}>({=[?]})", N, self.as_ref())
+    }
+}
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+    > Format for crate::BoundedTable<K, B_ML, B_MAP, B_BAYES, C>
+{
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "BoundedTable<{}, {}, {}, {}, {}> {{ {} }}",
+            K,
+            B_ML,
+            B_MAP,
+            B_BAYES,
+            C,
+            self.view()
+        )
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl Format for crate::BayesSpec {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "BayesSpec {{ lambda: {}, rows: {=[?]}, {} ranges, {} terms }}",
+            self.lambda,
+            &self.rows[..],
+            self.ranges.len(),
+            self.terms.len()
+        )
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl Format for crate::DynTable {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "DynTable {{ {} }}", self.view())
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl Format for crate::DynQTable<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "DynQTable(K = {}, int{}, {} bytes, Bayes {})",
+            self.k(),
+            self.bits(),
+            self.section_len(),
+            self.has_bayes()
         )
     }
 }

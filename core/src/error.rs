@@ -1,8 +1,11 @@
 //! Error types of the layer: one small enum per failure domain.
 //!
-//! Every type here is `Copy`, has a one-sentence [`Display`](core::fmt::Display) per
-//! variant, and implements [`core::error::Error`]. None of them carries a postcard error:
-//! the wire library is an implementation detail.
+//! Every type here is `Copy`, has one sentence per variant (`message`) and implements
+//! [`core::error::Error`]. `message` is the one text of a variant: [`Display`](core::fmt::Display)
+//! prints it as it is for a variant without fields, and with the fields worked into the
+//! sentence otherwise; `defmt` prints it followed by the fields; the C API's status
+//! strings are checked against it (`ffi/tests/same_bits.rs`). None of them carries a
+//! postcard error: the wire library is an implementation detail.
 
 use core::fmt;
 
@@ -120,6 +123,39 @@ pub enum TableError {
     },
 }
 
+impl TableError {
+    /// The one sentence describing the variant, without its fields.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Edges { .. } => "histogram edges are not finite and strictly increasing",
+            Self::Frequencies { .. } => {
+                "histogram frequencies are not finite, non-negative and summing to 1"
+            }
+            Self::BinCount { .. } => "histogram bin count differs from the table's",
+            Self::Mean { .. } => "prior mean is not finite",
+            Self::Variance { .. } => {
+                "prior variance is not finite and positive (or 1/(2 var) overflows)"
+            }
+            Self::Lambda { .. } => "a smoothing lambda is out of range",
+            Self::Name { .. } => "a class name breaks the naming rule",
+            Self::DuplicateName { .. } => "a class name repeats an earlier class name",
+            Self::ClassCount => "a table needs between 2 and 65535 classes",
+            Self::CategoryRows { .. } => {
+                "a Bayes category has no training rows (or the row counts overflow)"
+            }
+            Self::BayesShape => {
+                "Bayes head: categories are not K or K + 1, or a sequence has the wrong length"
+            }
+            // The bounds as `{:e}` prints them (checked by a test).
+            Self::Temperature => "open head: the temperature is not in [1e-6, 1e6]",
+            Self::Epsilon => "open head: epsilon is neither 0 nor in [1.1754944e-38, 1e30]",
+            Self::Map { .. } => {
+                "a recalibration map breaks its rule or is for a head the table does not have"
+            }
+        }
+    }
+}
+
 impl fmt::Display for TableError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
@@ -152,26 +188,13 @@ impl fmt::Display for TableError {
             Self::DuplicateName { class } => {
                 write!(f, "name of class {class} repeats an earlier class name")
             }
-            Self::ClassCount => f.write_str("a table needs between 2 and 65535 classes"),
             Self::CategoryRows { class } => write!(
                 f,
                 "Bayes category {class} has no training rows (or the row counts overflow)"
             ),
-            Self::BayesShape => f.write_str(
-                "Bayes head: categories are not K or K + 1, or a sequence has the wrong length"
-            ),
-            Self::Temperature => write!(
-                f,
-                "open head: the temperature is not in [{:e}, {:e}]",
-                crate::MIN_TEMPERATURE,
-                crate::MAX_TEMPERATURE
-            ),
-            Self::Epsilon => write!(
-                f,
-                "open head: epsilon is neither 0 nor in [{:e}, {:e}]",
-                f32::MIN_POSITIVE,
-                crate::MAX_EPSILON
-            ),
+            Self::ClassCount | Self::BayesShape | Self::Temperature | Self::Epsilon => {
+                f.write_str(self.message())
+            }
             Self::Map { head, error } => write!(f, "recalibration map of the {head} head: {error}"),
         }
     }
@@ -263,12 +286,36 @@ pub enum DecodeError {
     Invalid(TableError),
 }
 
+impl DecodeError {
+    /// The one sentence describing the variant, without its fields.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Truncated => "input is too short to be an mlmap table",
+            Self::NotATable => "input does not start with the mlmap magic `MLMP`",
+            Self::Corrupted => "table checksum does not match its contents",
+            Self::UnsupportedVersion { .. } => "table format version is not supported",
+            Self::ShapeMismatch { .. } => "table shape differs from the destination type's",
+            Self::BayesShapeMismatch { .. } => {
+                "table's Bayes head shape differs from the destination type's"
+            }
+            Self::MapCapacity { .. } => {
+                "table's recalibration map has more knots than the destination type holds"
+            }
+            Self::ObjectnessMismatch { .. } => {
+                "table's objectness feature differs from the destination type's"
+            }
+            Self::Malformed => "table body does not follow the mlmap format",
+            Self::Invalid(_) => "table breaks an invariant",
+        }
+    }
+}
+
 impl fmt::Display for DecodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::Truncated => f.write_str("input is too short to be an mlmap table"),
-            Self::NotATable => f.write_str("input does not start with the mlmap magic `MLMP`"),
-            Self::Corrupted => f.write_str("table checksum does not match its contents"),
+            Self::Truncated | Self::NotATable | Self::Corrupted | Self::Malformed => {
+                f.write_str(self.message())
+            }
             Self::UnsupportedVersion { found } => write!(
                 f,
                 "table format version {found} is not supported (this build reads versions 1 to {})",
@@ -294,7 +341,6 @@ impl fmt::Display for DecodeError {
             Self::ObjectnessMismatch { found: false } => f.write_str(
                 "table has no objectness feature; the table type requires one"
             ),
-            Self::Malformed => f.write_str("table body does not follow the mlmap format"),
             Self::Invalid(e) => write!(f, "invalid table: {e}"),
         }
     }
@@ -323,11 +369,18 @@ pub enum EncodeError {
     BufferTooSmall,
 }
 
+impl EncodeError {
+    /// The one sentence describing the variant.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::BufferTooSmall => "output buffer is too small for the table",
+        }
+    }
+}
+
 impl fmt::Display for EncodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::BufferTooSmall => f.write_str("output buffer is too small for the table"),
-        }
+        f.write_str(self.message())
     }
 }
 
@@ -362,17 +415,30 @@ pub enum InferError {
     },
 }
 
+impl InferError {
+    /// The one sentence describing the variant, without its fields.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::NanLogit { .. } => "a logit is NaN",
+            Self::Objectness => "objectness is NaN or outside [0, 1]",
+            Self::Length => "logits or output do not have one entry per class",
+            Self::Evidence => "evidence is not finite and >= 0, or lambda is out of range",
+            Self::NoBayesHead => "the table has no Bayes head",
+            Self::NoOpenHead => "the table has no open head",
+            Self::CodeRange { .. } => "a quantized logit is outside the section's code range",
+        }
+    }
+}
+
 impl fmt::Display for InferError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Self::NanLogit { class } => write!(f, "logit of class {class} is NaN"),
-            Self::Objectness => f.write_str("objectness is NaN or outside [0, 1]"),
-            Self::Length => f.write_str("logits or output do not have one entry per class"),
-            Self::Evidence => {
-                f.write_str("evidence is not finite and >= 0, or lambda is out of range")
-            }
-            Self::NoBayesHead => f.write_str("the table has no Bayes head"),
-            Self::NoOpenHead => f.write_str("the table has no open head"),
+            Self::Objectness
+            | Self::Length
+            | Self::Evidence
+            | Self::NoBayesHead
+            | Self::NoOpenHead => f.write_str(self.message()),
             Self::CodeRange { class } => write!(
                 f,
                 "quantized logit of class {class} is outside the section's code range"
@@ -398,12 +464,20 @@ pub enum BatchError {
     },
 }
 
+impl BatchError {
+    /// The one sentence describing the variant, without its fields.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::LengthMismatch => "logits, objectness and output slices differ in length",
+            Self::Row { .. } => "a row of the batch is invalid",
+        }
+    }
+}
+
 impl fmt::Display for BatchError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::LengthMismatch => {
-                f.write_str("logits, objectness and output slices differ in length")
-            }
+            Self::LengthMismatch => f.write_str(self.message()),
             Self::Row { index, error } => write!(f, "row {index}: {error}"),
         }
     }
@@ -415,5 +489,68 @@ impl core::error::Error for BatchError {
             Self::Row { error, .. } => Some(error),
             Self::LengthMismatch => None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::format;
+    use std::string::ToString;
+
+    use super::*;
+
+    /// The messages that spell out constants as `Display` would format them.
+    #[test]
+    fn messages_quote_the_constants_they_name() {
+        let t = format!(
+            "open head: the temperature is not in [{:e}, {:e}]",
+            crate::MIN_TEMPERATURE,
+            crate::MAX_TEMPERATURE
+        );
+        assert_eq!(TableError::Temperature.message(), t);
+        let e = format!(
+            "open head: epsilon is neither 0 nor in [{:e}, {:e}]",
+            f32::MIN_POSITIVE,
+            crate::MAX_EPSILON
+        );
+        assert_eq!(TableError::Epsilon.message(), e);
+    }
+
+    /// A variant without fields displays exactly its message.
+    #[test]
+    fn display_of_a_variant_without_fields_is_its_message() {
+        for e in [
+            TableError::ClassCount,
+            TableError::BayesShape,
+            TableError::Temperature,
+            TableError::Epsilon,
+        ] {
+            assert_eq!(e.to_string(), e.message());
+        }
+        for e in [
+            DecodeError::Truncated,
+            DecodeError::NotATable,
+            DecodeError::Corrupted,
+            DecodeError::Malformed,
+        ] {
+            assert_eq!(e.to_string(), e.message());
+        }
+        for e in [
+            InferError::Objectness,
+            InferError::Length,
+            InferError::Evidence,
+            InferError::NoBayesHead,
+            InferError::NoOpenHead,
+        ] {
+            assert_eq!(e.to_string(), e.message());
+        }
+        assert_eq!(
+            EncodeError::BufferTooSmall.to_string(),
+            EncodeError::BufferTooSmall.message()
+        );
+        assert_eq!(
+            BatchError::LengthMismatch.to_string(),
+            BatchError::LengthMismatch.message()
+        );
     }
 }

@@ -35,15 +35,22 @@ pub enum CharKind {
     Noncharacter,
 }
 
-impl fmt::Display for CharKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
+impl CharKind {
+    /// The words naming the kind, shared by `Display` and `defmt`.
+    pub const fn message(self) -> &'static str {
+        match self {
             Self::Control => "a control character",
             Self::Invisible => "an invisible or bidirectional formatting character",
             Self::Separator => "a separator other than the space",
             Self::PrivateUse => "a private-use character",
             Self::Noncharacter => "a noncharacter",
-        })
+        }
+    }
+}
+
+impl fmt::Display for CharKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.message())
     }
 }
 
@@ -75,20 +82,32 @@ pub enum NameError {
     },
 }
 
+impl NameError {
+    /// The one sentence describing the variant, without its fields (`TooLong` quotes
+    /// [`NAME_MAX`], checked by a test).
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Empty => "the name is empty",
+            Self::TooLong => "the name is longer than 31 bytes",
+            Self::Reserved => "`background` is reserved (the label of rows without an object)",
+            Self::Char { .. } => "the name holds a character it may not hold",
+            Self::Padded => "the name starts or ends with a space",
+            Self::Repeated { .. } => "the name repeats the name of an earlier class",
+        }
+    }
+}
+
 impl fmt::Display for NameError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            Self::Empty => f.write_str("the name is empty"),
-            Self::TooLong => write!(f, "the name is longer than {NAME_MAX} bytes"),
-            Self::Reserved => {
-                f.write_str("`background` is reserved (the label of rows without an object)")
+            Self::Empty | Self::TooLong | Self::Reserved | Self::Padded => {
+                f.write_str(self.message())
             }
             Self::Char { ch, at, kind } => write!(
                 f,
                 "the name holds {kind}, U+{:04X}, at byte {at}",
                 u32::from(ch)
             ),
-            Self::Padded => f.write_str("the name starts or ends with a space"),
             Self::Repeated { first } => {
                 write!(f, "the name repeats the name of class {first}")
             }
@@ -301,6 +320,12 @@ impl fmt::Display for ClassName {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_too_long_message_quotes_name_max() {
+        let want = std::format!("the name is longer than {NAME_MAX} bytes");
+        assert_eq!(NameError::TooLong.message(), want);
+    }
 
     /// Each range of refused characters by its first and last code point and the
     /// allowed neighbours just outside it, from the Unicode 15.1 character database

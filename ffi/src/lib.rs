@@ -1301,6 +1301,8 @@ unsafe fn decide_c(
 ///
 /// @param status A value returned by any function of this API.
 /// @return The description.
+// A status that stands for one error of the layer is described by that error's
+// `message()` (checked by `status_strings_are_the_layers_messages` in tests/same_bits.rs).
 #[no_mangle]
 pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
     let s: &'static core::ffi::CStr = match status {
@@ -1311,7 +1313,7 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         4 => c"the table storage holds no decoded table",
         5 => c"memory that must be disjoint overlaps (an output and the table storage, two outputs, or a batch's scores and its inputs)",
         6 => c"input is too short to be an mlmap table",
-        7 => c"input does not start with the mlmap magic MLMP",
+        7 => c"input does not start with the mlmap magic `MLMP`",
         8 => c"table checksum does not match its contents",
         9 => c"table format version is not supported",
         10 => c"table has more classes or bins than MLMAP_MAX_CLASSES and MLMAP_MAX_BINS allow",
@@ -1328,8 +1330,8 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         21 => c"a length is too large to describe memory",
         22 => c"a score is NaN",
         23 => c"the table has no open head",
-        24 => c"table's open head has a temperature outside [1e-6, 1e6]",
-        25 => c"table's open head has an epsilon that is neither 0 nor in [2^-126, 1e30]",
+        24 => c"open head: the temperature is not in [1e-6, 1e6]",
+        25 => c"open head: epsilon is neither 0 nor in [1.1754944e-38, 1e30]",
         _ => c"unknown mlmap status",
     };
     s.as_ptr()

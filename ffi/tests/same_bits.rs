@@ -193,3 +193,84 @@ fn every_status_has_a_distinct_description() {
     let next = unsafe { std::ffi::CStr::from_ptr(mlmap_status_str(ALL_STATUSES.len() as i32)) };
     assert_eq!(next, unknown);
 }
+
+/// The status of an error of the layer is described by that error's one message
+/// (`message()` of mlmap's error types), for every status that stands for exactly one
+/// kind of error of the layer.
+#[test]
+fn status_strings_are_the_layers_messages() {
+    use mlmap::{DecodeError, InferError, TableError};
+    let cases: [(DecodeErrorOrInfer, &str); 12] = [
+        (
+            DecodeError::Truncated.into(),
+            DecodeError::Truncated.message(),
+        ),
+        (
+            DecodeError::NotATable.into(),
+            DecodeError::NotATable.message(),
+        ),
+        (
+            DecodeError::Corrupted.into(),
+            DecodeError::Corrupted.message(),
+        ),
+        (
+            DecodeError::UnsupportedVersion { found: 9 }.into(),
+            DecodeError::UnsupportedVersion { found: 9 }.message(),
+        ),
+        (
+            DecodeError::Malformed.into(),
+            DecodeError::Malformed.message(),
+        ),
+        (
+            DecodeError::Invalid(TableError::ClassCount).into(),
+            DecodeError::Invalid(TableError::ClassCount).message(),
+        ),
+        (
+            DecodeError::Invalid(TableError::Temperature).into(),
+            TableError::Temperature.message(),
+        ),
+        (
+            DecodeError::Invalid(TableError::Epsilon).into(),
+            TableError::Epsilon.message(),
+        ),
+        (
+            InferError::NanLogit { class: 1 }.into(),
+            InferError::NanLogit { class: 1 }.message(),
+        ),
+        (
+            InferError::Objectness.into(),
+            InferError::Objectness.message(),
+        ),
+        (
+            InferError::NoBayesHead.into(),
+            InferError::NoBayesHead.message(),
+        ),
+        (
+            InferError::NoOpenHead.into(),
+            InferError::NoOpenHead.message(),
+        ),
+    ];
+    let mut statuses = std::collections::HashSet::new();
+    for (status, message) in cases {
+        let s: mlmap_status_t = status.0;
+        // SAFETY: a static NUL-terminated string.
+        let d = unsafe { std::ffi::CStr::from_ptr(mlmap_status_str(s as i32)) };
+        assert_eq!(d.to_str().unwrap(), message, "{s:?}");
+        assert!(statuses.insert(s as i32), "{s:?} twice");
+    }
+}
+
+/// The status an error of the layer maps to.
+struct DecodeErrorOrInfer(mlmap_status_t);
+
+impl From<mlmap::DecodeError> for DecodeErrorOrInfer {
+    fn from(e: mlmap::DecodeError) -> Self {
+        Self(e.into())
+    }
+}
+
+impl From<mlmap::InferError> for DecodeErrorOrInfer {
+    fn from(e: mlmap::InferError) -> Self {
+        Self(e.into())
+    }
+}

@@ -157,9 +157,9 @@ fn score(table: &EmbeddedTable, logits: &[f32; 3], os: f32) -> Result<u32, Infer
     failed += u32::from(table.class_name(bayes.argmax()).is_none());
     #[cfg(feature = "micromath")]
     {
-        let fast = table.map_with::<mlmap::FastMath>(logits, os)?;
+        let fast = table.map_with::<mlmap::Micromath>(logits, os)?;
         failed += u32::from(!sane(&fast, os));
-        let fast = table.bayes_with::<mlmap::FastMath>(logits, os)?;
+        let fast = table.bayes_with::<mlmap::Micromath>(logits, os)?;
         failed += u32::from(!sane_at_most(&fast, os));
     }
     Ok(failed)
@@ -311,7 +311,7 @@ fn run() -> u32 {
     {
         failed += u32::from(
             decoded
-                .map_batch_with::<mlmap::FastMath>(&logits, Some(&os), &mut out)
+                .map_batch_with::<mlmap::Micromath>(&logits, Some(&os), &mut out)
                 .is_err(),
         );
     }

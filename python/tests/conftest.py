@@ -1,5 +1,7 @@
 """Shared fixtures: the repository, the shipped data as numpy arrays, and the `mlmap`
-command-line tool, whose outputs are the golden values of these tests."""
+command-line tool, whose outputs are the golden values of the binding tests (the
+correctness of the scores and the fit is checked against the numpy reference
+tools/mlmap_ref.py)."""
 
 import csv
 import json

@@ -1,8 +1,10 @@
-"""`mlmap.fit`, `mlmap.tune` and the mergeable statistics: the same table bytes as
+"""`mlmap.fit`, `mlmap.tune` and the mergeable statistics: the bytes of the independent
+numpy fit (tools/mlmap_ref.py) with the default settings, and the same table bytes as
 `mlmap fit` / `mlmap tune` on the shipped data, whatever the split of the rows."""
 
 import json
 import pickle
+import sys
 
 import numpy as np
 import pytest
@@ -10,7 +12,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import mlmap
-from conftest import CLASSES, DEFAULT_TABLE
+from conftest import CLASSES, DEFAULT_TABLE, ROOT
+
+sys.path.insert(0, str(ROOT / "tools"))
+import mlmap_ref  # noqa: E402  (the independent numpy implementation)
 
 TRAIN = "examples/data/train.csv"
 
@@ -39,6 +44,19 @@ SETTINGS = [
 def test_fit_gives_the_bytes_of_mlmap_fit(data, cli, tmp_path, kw, flags):
     train = data["train"]
     want = cli_table(cli, tmp_path, *flags)
+    got = mlmap.fit(train.logits, train.labels, train.objectness, classes=CLASSES, **kw)
+    assert got.to_bytes() == want
+
+
+@pytest.mark.parametrize("bayes", [True, False])
+def test_fit_gives_the_bytes_of_the_numpy_reference(data, bayes):
+    """The fit with the default settings, with and without the Bayes head: the bytes of
+    the independent numpy fit of tools/mlmap_ref.py (written from docs/DESIGN.md)."""
+    train = data["train"]
+    classes, lml, lmap, head = mlmap_ref.fit(str(ROOT / TRAIN), bayes=bayes)
+    want = mlmap_ref.encode(classes, lml, lmap, bayes=head,
+                            open_=mlmap_ref.UNTUNED_OPEN if bayes else None)
+    kw = {} if bayes else dict(bayes=None)
     got = mlmap.fit(train.logits, train.labels, train.objectness, classes=CLASSES, **kw)
     assert got.to_bytes() == want
 

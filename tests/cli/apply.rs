@@ -131,3 +131,39 @@ fn apply_reads_npy_directories() {
     let third: f32 = records[2][0].parse().unwrap();
     assert!((third - 1.0 / 3.0).abs() < 1e-6);
 }
+
+/// `apply`'s score columns against the independent numpy reference (not the library):
+/// the shipped table on the test split, every row the golden file samples, each score
+/// within `GOLDEN_ABS_TOL` of the float64 value.
+#[test]
+fn apply_scores_match_the_numpy_reference_on_the_test_split() {
+    use crate::support::{goldens, GOLDEN_ABS_TOL, TEST_SPLIT_CSV};
+    let dir = tempdir();
+    let d = dir.path();
+    let (header, records) = apply(d, &bayes_table(), &data("test"), "out.csv");
+    let by_id: BTreeMap<&str, &Vec<String>> = records.iter().map(|r| (r[0].as_str(), r)).collect();
+    let column = |name: String| header.iter().position(|h| *h == name).unwrap();
+    let golden = goldens(TEST_SPLIT_CSV);
+    assert_eq!(golden.len(), 500);
+    let mut worst = 0.0f64;
+    for g in &golden {
+        let id = g
+            .case
+            .strip_prefix("id ")
+            .expect("the case names the row's id");
+        let rec = by_id[id];
+        for (head, want) in [("ml", g.ml), ("map", g.map), ("bayes", g.bayes)] {
+            let want = want.expect("scores for every row of the test split");
+            for (c, w) in CLASSES.iter().zip(want) {
+                let got: f32 = rec[column(format!("{head}_{c}"))].parse().unwrap();
+                let err = (f64::from(got) - w).abs();
+                worst = worst.max(err);
+                assert!(
+                    err <= GOLDEN_ABS_TOL,
+                    "{head}_{c}, id {id}: got {got}, want {w}"
+                );
+            }
+        }
+    }
+    eprintln!("apply, test split: worst score error {worst:e}");
+}

@@ -25,7 +25,8 @@ mod fit;
 /// tuner's objectives equal the metrics module's on the written table's scores.
 mod tune;
 
-/// `apply`: the output columns of every input layout, and every score bit for bit.
+/// `apply`: the output columns of every input layout, every score bit for bit with the
+/// library, and the scores against the numpy reference.
 mod apply;
 
 /// `eval`: the JSON keys and the layer's metrics, the text and markdown reports, the
