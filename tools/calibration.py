@@ -18,6 +18,9 @@ second half is evaluated; no evaluated row chooses a setting.
    answer on an unseen object as the mistake it is; `ood_mean` comes from OOD_EVAL alone;
    temperature scaling is fitted on val.csv.
 
+`--tune-flag=FLAG` (repeatable) passes FLAG to `mlmap tune` (e.g.
+`--tune-flag=--objectness-feature`, `--tune-flag=--no-maps`).
+
 It prints one markdown table (method x ECE, NLL, Brier, accuracy, mAP, AUROC, unseen
 mean) and, with --check, the goals of docs/CALIBRATION.md, exiting 1 if one is missed.
 Standard library only.
@@ -130,12 +133,15 @@ def check(results, background):
 
 
 def main():
-    args = [a for a in sys.argv[1:] if a != "--check"]
+    # `--tune-flag=FLAG` (repeatable) passes FLAG to `mlmap tune`, e.g.
+    # `--tune-flag=--objectness-feature` or `--tune-flag=--no-maps`.
+    extra = [a.split("=", 1)[1] for a in sys.argv[1:] if a.startswith("--tune-flag=")]
+    args = [a for a in sys.argv[1:] if a != "--check" and not a.startswith("--tune-flag=")]
     if not args:
         sys.exit(__doc__)
     missed = []
     for data in args:
-        results = evaluate(data)
+        results = evaluate(data, extra)
         print(f"\n### {data}\n")
         print(table(results))
         if "--check" in sys.argv:

@@ -153,7 +153,7 @@ pub(crate) fn eval<S: Knots + ?Sized>(k: &S, t: f32) -> f32 {
     }
     match (k.knot(lo), k.knot(lo + 1)) {
         (Some(a), Some(b)) => {
-            let f = ((t - a.x) / (b.x - a.x)).max(0.0).min(1.0);
+            let f = ((t - a.x) / (b.x - a.x)).clamp(0.0, 1.0);
             (a.y + (b.y - a.y) * f).min(b.y)
         }
         _ => t,
