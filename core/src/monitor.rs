@@ -243,11 +243,7 @@ impl<'m> MonitorState<'m> {
     /// A state over storage that holds a window in progress (as the calls left it):
     /// nothing is cleared. Whatever the storage holds, no call panics; counts that no
     /// call wrote give meaningless metrics.
-    pub fn resume(
-        tails: &'m mut [u32],
-        bins: &'m mut [u32],
-        acc: &'m mut Accumulators,
-    ) -> Self {
+    pub fn resume(tails: &'m mut [u32], bins: &'m mut [u32], acc: &'m mut Accumulators) -> Self {
         Self { tails, bins, acc }
     }
 
@@ -560,7 +556,10 @@ impl<'a> MonitorSpec<'a> {
             for &count in tails {
                 sum += term(count, 0.0, inv_n, floor);
             }
-            let shares = self.reference.get(4 * j * b..4 * (j + 1) * b).unwrap_or_default();
+            let shares = self
+                .reference
+                .get(4 * j * b..4 * (j + 1) * b)
+                .unwrap_or_default();
             for (&count, e) in bins.iter().zip(shares.chunks_exact(4)) {
                 let e = <[u8; 4]>::try_from(e).map_or(0.0, f32::from_le_bytes);
                 sum += term(count, e, inv_n, floor);
@@ -787,7 +786,13 @@ impl<'s, const K: usize, const B: usize, const C: usize> Monitor<'s, K, B, C> {
         let spec = self.spec;
         let mut scratch = [0.0f32; C];
         let mut psi = [0.0f32; K];
-        let summary = spec.push(&mut self.state(), logits, objectness, &mut scratch, &mut psi)?;
+        let summary = spec.push(
+            &mut self.state(),
+            logits,
+            objectness,
+            &mut scratch,
+            &mut psi,
+        )?;
         Ok(summary.map(|summary| WindowReport { summary, psi }))
     }
 
@@ -815,7 +820,10 @@ impl<'s, const K: usize, const B: usize, const C: usize> Monitor<'s, K, B, C> {
             &mut scratch,
             &mut psi,
         )?;
-        Ok((Scores(out), summary.map(|summary| WindowReport { summary, psi })))
+        Ok((
+            Scores(out),
+            summary.map(|summary| WindowReport { summary, psi }),
+        ))
     }
 
     /// Ends the current window early (the end of a log): its report, `None` when it is

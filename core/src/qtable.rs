@@ -42,8 +42,8 @@ use crate::error::{Head, InferError};
 use crate::layer::{self, Scores};
 use crate::math::Backend;
 use crate::open::{self, OpenParams};
-use crate::view::{BayesBackend, OpenBackend};
 use crate::sections;
+use crate::view::{BayesBackend, OpenBackend};
 
 /// The four bytes a quantized section starts with.
 pub const QUANTIZED_MAGIC: [u8; 4] = *b"MLMQ";

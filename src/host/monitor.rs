@@ -10,8 +10,8 @@ use std::vec::Vec;
 
 use mlmap_core::{
     monitor_section_len, section_of, table_of, write_monitor_section, Accumulators, DynTable,
-    InferError, MonitorError, MonitorParams, MonitorSpec, MonitorState, Thresholds,
-    WindowSummary, MONITOR_MAGIC, QUANTIZED_MAGIC,
+    InferError, MonitorError, MonitorParams, MonitorSpec, MonitorState, Thresholds, WindowSummary,
+    MONITOR_MAGIC, QUANTIZED_MAGIC,
 };
 
 /// The magic of the conformal section (DESIGN §8), kept when a monitor is written.
@@ -136,7 +136,13 @@ impl DynMonitor {
     ) -> Result<Option<(WindowSummary, Vec<f32>)>, InferError> {
         let mut scratch = std::mem::take(&mut self.scratch);
         let mut psi = std::mem::take(&mut self.psi);
-        let r = spec.push(&mut self.state(), logits, objectness, &mut scratch, &mut psi);
+        let r = spec.push(
+            &mut self.state(),
+            logits,
+            objectness,
+            &mut scratch,
+            &mut psi,
+        );
         let out = r.map(|s| s.map(|s| (s, psi.clone())));
         self.scratch = scratch;
         self.psi = psi;
@@ -265,7 +271,9 @@ pub fn fit_thresholds(
     let rate = |t: &Thresholds| -> f64 {
         let alarms = summaries
             .iter()
-            .filter(|s| s.psi_max > t.psi || s.oos_rate > t.oos || s.q_mean.is_some_and(|q| q < t.q))
+            .filter(|s| {
+                s.psi_max > t.psi || s.oos_rate > t.oos || s.q_mean.is_some_and(|q| q < t.q)
+            })
             .count();
         if r == 0 {
             0.0

@@ -318,7 +318,9 @@ fn line(out: &mut String, format: LogFormat, s: &WindowSummary, psi: &[f32], nam
             let _ = writeln!(out, "{v}");
         }
         LogFormat::Text => {
-            let q = s.q_mean.map_or_else(|| "-".to_string(), |q| format!("{q:.4}"));
+            let q = s
+                .q_mean
+                .map_or_else(|| "-".to_string(), |q| format!("{q:.4}"));
             let mut alarms: Vec<&str> = Vec::new();
             if s.alarms.psi {
                 alarms.push("psi");
