@@ -208,6 +208,14 @@ def goldens(outdir):
         with open(os.path.join(outdir, f"windows_{name}.json"), "w") as fh:
             json.dump(dict(meta, window=50, input=f"examples/data/{name}.csv", windows=wins),
                       fh, indent=1)
+        # The same windows as CSV, for the C tests (ffi/tests/host.c, the firmware).
+        with open(os.path.join(outdir, f"windows_{name}.csv"), "w") as fh:
+            fh.write(f"# tools/monitor_ref.py, numpy {np.__version__}: examples/data/{name}.csv, "
+                     "W = 50, tables/default.mlmap\n")
+            fh.write("window,rows,psi_max,psi_logit,oos_rate,q_mean\n")
+            for m in wins:
+                fh.write(f"{m['window']},{m['rows']},{m['psi_max']!r},{m['psi_logit']},"
+                         f"{m['oos_rate']!r},{m['q_mean']!r}\n")
     _, _, x, _ = logits_f32("examples/data/val.csv")
     bins_ = row_bins(t, x)
     fitted = fit_thresholds(bins_, row_outside(bins_, ref), row_q(t, x), ref,
