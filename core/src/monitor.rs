@@ -573,7 +573,7 @@ impl<'a> MonitorSpec<'a> {
             }
         }
         let oos_rate = st.acc.outside as f32 * inv_n;
-        let q_mean = self.has_q().then(|| st.acc.q_sum * inv_n);
+        let q_mean = self.has_q().then_some(st.acc.q_sum * inv_n);
         let t = self.params.thresholds;
         let alarms = if n >= self.params.window {
             Alarms {

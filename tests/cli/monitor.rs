@@ -174,3 +174,24 @@ fn refusals() {
         &["bad.csv:3", "cyclist"],
     );
 }
+
+/// `inspect` shows the monitor section, text and JSON, and the table's own size.
+#[test]
+fn inspect_shows_the_section() {
+    let dir = tempdir();
+    let small = repo("tests/golden/monitor_small.mlmap");
+    let small = small.to_str().unwrap();
+    let run = ok(dir.path(), &["inspect", small]);
+    assert!(
+        run.stdout.contains("monitor    section 308 bytes"),
+        "{}",
+        run.stdout
+    );
+    assert!(run.stdout.contains("windows of 50 detections"));
+    assert!(run.stdout.contains("1704 bytes"));
+    let v = ok_json(dir.path(), &["inspect", small, "--format", "json"]);
+    assert_eq!(v["monitor"]["window"], 50);
+    assert_eq!(v["monitor"]["bytes"], 308);
+    let v = ok_json(dir.path(), &["inspect", &bayes_table(), "--format", "json"]);
+    assert!(v["monitor"].is_null());
+}

@@ -192,7 +192,7 @@ fn spec_of<'a>(
     MonitorSpec::from_bytes(bytes, &table.view()).map_err(|e| CliError::input(path, e))
 }
 
-fn replay(args: &MonitorArgs, table_path: &PathBuf, input: &PathBuf) -> Result<()> {
+fn replay(args: &MonitorArgs, table_path: &std::path::Path, input: &std::path::Path) -> Result<()> {
     let (table, bytes) = read_table(table_path)?;
     if table.bayes().is_none() {
         return Err(CliError::input(
