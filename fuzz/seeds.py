@@ -403,6 +403,16 @@ def main():
         params = u8(width) + struct.pack("<fff", scale, scale * 0.7, scale * 1.3) + struct.pack("<hhh", zp, 3, -7)
         write("quantized", name, u8(1) + params + codes)
 
+    # monitor: the shipped example's section, then detections (3 f32 logits, objectness byte)
+    with open(os.path.join(ROOT, "tests", "golden", "monitor_small.mlmap"), "rb") as f:
+        mon = f.read()
+    m = struct.unpack("<I", mon[-8:-4])[0]
+    dets = b"".join(struct.pack("<fffB", a, b, c, o) for a, b, c, o in
+                    ((1.0, -2.0, 0.5, 200), (1e6, -1e6, 0.0, 255), (float("inf"), 0.0, -3.0, 0),
+                     (0.25, 0.25, 0.25, 128)) * 30)
+    write("monitor", "section_and_detections.bin", struct.pack("<H", m) + mon[-m:] + dets)
+    write("monitor", "section_header.bin", struct.pack("<H", 60) + mon[-m:][:52] + mon[-8:] + dets[:39])
+
     # csv (the target is built once the reader lands; see fuzz_targets/csv.rs)
     with open(os.path.join(ROOT, "examples", "data", "test.csv"), "rb") as f:
         write("csv", "test_head.csv", b"".join(f.readlines()[:20]))

@@ -77,6 +77,15 @@ typedef struct mlmap_table {
 } mlmap_table_t;
 /** @} */
 
+/**
+ * Bytes of a drift monitor's storage (docs/DESIGN.md section 7) for a table of `k`
+ * classes whose Bayes head has `bins` bins per logit: a fixed part
+ * (`MLMAP_MONITOR_HEADER`) and `k (bins + 2)` 32-bit counts. Align it to
+ * `MLMAP_MONITOR_ALIGN` (8), e.g. `static uint64_t mon[MLMAP_MONITOR_SIZE(3, 22) / 8];`.
+ */
+#define MLMAP_MONITOR_SIZE(k, bins) \
+  ((size_t)256 + 4 * (size_t)(k) * ((size_t)(bins) + 2))
+
 
 /**
  * Alignment of `mlmap_table_t` in bytes.
@@ -87,6 +96,17 @@ typedef struct mlmap_table {
  * Longest class name in bytes, without the terminating NUL.
  */
 #define MLMAP_NAME_MAX 31
+
+/**
+ * Bytes of the fixed part of a monitor's storage (its spec and running sums); the
+ * counts follow it. `MLMAP_MONITOR_SIZE(k, bins)` adds `4 k (bins + 2)` bytes.
+ */
+#define MLMAP_MONITOR_HEADER 256
+
+/**
+ * Alignment of a monitor's storage in bytes.
+ */
+#define MLMAP_MONITOR_ALIGN 8
 
 /**
  * The result of every function: `MLMAP_OK` or the reason for the failure.
@@ -218,6 +238,19 @@ enum mlmap_status_t
    * table invariant, reported on its own).
    */
   MLMAP_ERR_OPEN_EPSILON = 25,
+  /**
+   * The monitor storage holds no monitor (mlmap_monitor_init() did not succeed on it).
+   */
+  MLMAP_ERR_NO_MONITOR = 26,
+  /**
+   * The bytes hold no section of the kind asked for (a monitor section: magic MLMW).
+   */
+  MLMAP_ERR_NO_SECTION = 27,
+  /**
+   * A section breaks its format or does not belong to the table (another shape or
+   * table CRC, a window of 0, a threshold or share out of range).
+   */
+  MLMAP_ERR_INVALID_SECTION = 28,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -311,6 +344,52 @@ typedef struct {
    */
   float epsilon;
 } mlmap_settings_t;
+
+/**
+ * The metrics of one window (docs/DESIGN.md section 7).
+ */
+typedef struct {
+  /**
+   * Index of the window, from 0.
+   */
+  uint32_t window;
+  /**
+   * Detections in the window (`W`, or fewer for a window ended by mlmap_monitor_finish()).
+   */
+  uint32_t rows;
+  /**
+   * The largest per-logit population stability index.
+   */
+  float psi_max;
+  /**
+   * The logit (class index) of `psi_max`.
+   */
+  uint32_t psi_logit;
+  /**
+   * Share of the detections with a logit out of support.
+   */
+  float oos_rate;
+  /**
+   * Mean known-probability q of the open head; NaN when the table has no open head.
+   */
+  float q_mean;
+  /**
+   * 1 when any metric passed its threshold, else 0.
+   */
+  uint32_t alarm;
+  /**
+   * 1 when `psi_max` passed its threshold.
+   */
+  uint32_t alarm_psi;
+  /**
+   * 1 when `oos_rate` passed its threshold.
+   */
+  uint32_t alarm_oos;
+  /**
+   * 1 when `q_mean` fell below its threshold.
+   */
+  uint32_t alarm_q;
+} mlmap_window_t;
 
 #ifdef __cplusplus
 extern "C" {
@@ -681,6 +760,103 @@ mlmap_status_t mlmap_decide(const float *scores,
  * @return The description.
  */
 const char *mlmap_status_str(int32_t status);
+
+/**
+ * Initialises a drift monitor in `monitor` for `table` from the monitor section in
+ * `bytes` (a table file with the section, as written by `mlmap monitor fit`, or the
+ * section alone), its first window empty.
+ *
+ * Checks the section as the Rust `MonitorSpec::from_bytes` does: the magic, the CRC,
+ * the version, the shape against the table's Bayes head, the table's CRC when the
+ * table precedes the section, the window, alpha, the thresholds and every share.
+ *
+ * Lifetime: the monitor keeps pointers into `table` and `bytes`: both must stay in
+ * place and unchanged while the monitor is used (a table decoded again, or bytes
+ * rewritten, need mlmap_monitor_init() again). On failure the storage holds no
+ * monitor.
+ *
+ * @param[out] monitor Storage of `MLMAP_MONITOR_SIZE(k, bins)` bytes aligned to
+ *   `MLMAP_MONITOR_ALIGN`, `k` the table's classes and `bins` its Bayes bins.
+ * @param monitor_size Its size in bytes (`MLMAP_ERR_STORAGE_TOO_SMALL` when too small).
+ * @param table A decoded table with the Bayes head (`MLMAP_ERR_NO_BAYES_HEAD`).
+ * @param bytes The bytes holding the monitor section; they must not overlap the monitor.
+ * @param len Number of bytes.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_NO_BAYES_HEAD`, `MLMAP_ERR_STORAGE_TOO_SMALL`,
+ *   `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NO_SECTION`,
+ *   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`, `MLMAP_ERR_INVALID_SECTION`.
+ */
+mlmap_status_t mlmap_monitor_init(void *monitor,
+                                  size_t monitor_size,
+                                  const mlmap_table_t *table,
+                                  const uint8_t *bytes,
+                                  size_t len);
+
+/**
+ * Pushes one detection into the monitor's current window. When it completes the
+ * window (its `W`-th detection), writes the window's metrics into `*window`, its K
+ * per-logit PSI into `psi` (when given), `*completed = 1`, and starts the next window;
+ * otherwise writes `*completed = 0` only.
+ *
+ * Work: K bin lookups (and the Bayes log-scores for q when the table has the open
+ * head); the end of a window adds `K (B + 2)` terms. No allocation, bounded time.
+ *
+ * @param monitor A monitor from mlmap_monitor_init().
+ * @param logits K logits; they may lie anywhere (copied first).
+ * @param n_logits K (`MLMAP_ERR_LENGTH` otherwise).
+ * @param objectness In [0, 1] (`MLMAP_ERR_OBJECTNESS`).
+ * @param[out] window Receives a completed window's metrics.
+ * @param[out] psi NULL (with `psi_len` 0), or at least K floats for the per-logit PSI.
+ * @param psi_len Floats at `psi`.
+ * @param[out] completed 1 when a window was completed, else 0.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS` (nothing is
+ *   counted or written then).
+ */
+mlmap_status_t mlmap_monitor_push(void *monitor,
+                                  const float *logits,
+                                  size_t n_logits,
+                                  float objectness,
+                                  mlmap_window_t *window,
+                                  float *psi,
+                                  size_t psi_len,
+                                  uint32_t *completed);
+
+/**
+ * Ends the current window early (the end of a log): writes its metrics and
+ * `*completed = 1` when it holds any detection (a window of fewer than `W` detections
+ * raises no alarm), else `*completed = 0`; the next window starts empty.
+ *
+ * @param monitor A monitor from mlmap_monitor_init().
+ * @param[out] window Receives the window's metrics.
+ * @param[out] psi NULL (with `psi_len` 0), or at least K floats.
+ * @param psi_len Floats at `psi`.
+ * @param[out] completed 1 when a window was reported, else 0.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_monitor_finish(void *monitor,
+                                    mlmap_window_t *window,
+                                    float *psi,
+                                    size_t psi_len,
+                                    uint32_t *completed);
+
+/**
+ * The monitor's window `W`, false-alarm rate and thresholds (`psi_max > t_psi`,
+ * `oos_rate > t_oos`, `q_mean < t_q` alarm; infinite thresholds never do).
+ *
+ * @param monitor A monitor from mlmap_monitor_init().
+ * @param[out] window Receives `W`.
+ * @param[out] alpha Receives the false-alarm rate the thresholds were fitted for (0: none).
+ * @param[out] thresholds Receives `t_psi`, `t_oos`, `t_q` (3 floats).
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_monitor_params(void *monitor,
+                                    uint32_t *window,
+                                    float *alpha,
+                                    float *thresholds);
 
 #ifdef __cplusplus
 }  // extern "C"

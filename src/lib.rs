@@ -91,6 +91,13 @@ pub use mlmap_core::{
     QTableError, QuantizeError, MAX_LOG_TERM, MAX_MASS, QUANTIZED_MAGIC, QUANTIZED_VERSION,
 };
 
+// Runtime safety: the drift monitor (DESIGN §7) and the sections appended to a table.
+pub use mlmap_core::{
+    monitor_section_len, section_of, table_of, write_monitor_section, Accumulators, Alarms,
+    Monitor, MonitorError, MonitorParams, MonitorSpec, MonitorState, Thresholds, WindowReport,
+    WindowSummary, MONITOR_MAGIC, MONITOR_VERSION, REFERENCE_SUM_TOLERANCE,
+};
+
 pub use mlmap_core::{
     fast_math_max_score_error, FastMath, FAST_MATH_MAX_REL_ERROR, FAST_MATH_MAX_SCORE_ERROR,
 };

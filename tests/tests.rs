@@ -51,3 +51,8 @@ mod cli;
 /// logit in `apply`'s `*_pred` and in `eval`'s `accuracy` (DESIGN §1.7).
 #[cfg(feature = "cli")]
 mod cli_decisions;
+
+/// The drift monitor (DESIGN §7) against the numpy reference: training shares, windows,
+/// thresholds; the section's checks; counts and PSI properties.
+#[cfg(feature = "std")]
+mod monitor;

@@ -56,6 +56,7 @@ mod gaussian;
 mod histogram;
 mod layer;
 mod math;
+mod monitor;
 mod name;
 mod open;
 mod qtable;
@@ -63,6 +64,7 @@ mod qtable_build;
 #[cfg(feature = "alloc")]
 mod qtable_dyn;
 mod recal;
+mod sections;
 mod table;
 mod view;
 mod wire;
@@ -76,6 +78,11 @@ pub use histogram::{
 };
 pub use layer::{argmax, decide, scores_from_evidence, Scores};
 pub use math::{Backend, Libm};
+pub use monitor::{
+    monitor_section_len, write_monitor_section, Accumulators, Alarms, Monitor, MonitorError,
+    MonitorParams, MonitorSpec, MonitorState, Thresholds, WindowReport, WindowSummary,
+    MONITOR_MAGIC, MONITOR_VERSION, REFERENCE_SUM_TOLERANCE,
+};
 pub use name::{
     check_class_name, check_class_names, refused_char, CharKind, ClassName, NameError, NAME_MAX,
     NAME_RULE_VERSION,
@@ -87,6 +94,7 @@ pub use qtable::{
 };
 pub use qtable_build::{quantize_into, quantized_len, QParams, QuantizeError};
 pub use recal::{Knot, RecalMap, MAX_KNOTS};
+pub use sections::{section_of, table_of};
 pub use table::Table;
 pub use view::TableView;
 pub use wire::{ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};

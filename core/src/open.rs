@@ -119,7 +119,7 @@ pub(crate) fn score_from_log_scores<M: Backend>(
 
 /// `q`: the share of the K classes in the posterior over the categories and the unknown.
 #[inline(always)]
-fn known_share<M: Backend>(l: &[f32], k: usize, log_unknown: f32) -> f32 {
+pub(crate) fn known_share<M: Backend>(l: &[f32], k: usize, log_unknown: f32) -> f32 {
     // Every log-score is finite (the terms and priors are), so `max` is too.
     let max = l.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     let mut known = 0.0f32;

@@ -49,8 +49,8 @@ use crate::layer::{self, Scores};
 use crate::math::Backend;
 use crate::open::{self, OpenParams};
 use crate::recal::{self, KnotBytes};
+use crate::sections;
 use crate::view::{BayesBackend, OpenBackend};
-use crate::wire::CRC_CHECK;
 
 /// The four bytes a quantized section starts with.
 pub const QUANTIZED_MAGIC: [u8; 4] = *b"MLMQ";
@@ -428,36 +428,19 @@ fn offset(q: i32, start: i32) -> usize {
 ///
 /// [`QTableError::NotQuantized`] and [`QTableError::Corrupted`].
 pub(crate) fn locate(bytes: &[u8]) -> Result<(&[u8], &[u8]), QTableError> {
-    let n = bytes.len();
-    let trailer = bytes
-        .get(n.wrapping_sub(TRAILER_LEN)..)
-        .filter(|_| n >= HEADER_LEN + TRAILER_LEN)
-        .ok_or(QTableError::NotQuantized)?;
-    let mut r = Reader(trailer);
-    let len = usize::try_from(r.u32()?).map_err(|_| QTableError::NotQuantized)?;
-    let crc = r.u32()?;
-    let start = n.checked_sub(len).ok_or(QTableError::NotQuantized)?;
-    let section = bytes.get(start..).ok_or(QTableError::NotQuantized)?;
-    if len < HEADER_LEN + TRAILER_LEN || section.get(..4) != Some(&QUANTIZED_MAGIC[..]) {
+    let (section, table) = sections::find(bytes, QUANTIZED_MAGIC).map_err(|m| match m {
+        sections::Missing::Absent => QTableError::NotQuantized,
+        sections::Missing::Corrupted => QTableError::Corrupted,
+    })?;
+    if section.len() < HEADER_LEN + TRAILER_LEN {
         return Err(QTableError::NotQuantized);
     }
-    let payload = section.get(..len - 4).ok_or(QTableError::NotQuantized)?;
-    if CRC_CHECK.checksum(payload) != crc {
-        return Err(QTableError::Corrupted);
-    }
-    Ok((section, bytes.get(..start).unwrap_or(&[])))
+    Ok((section, table))
 }
 
-/// The table of a file that may have a quantized section appended: the bytes before a
-/// section whose magic and CRC check out, otherwise all of `bytes`. Every table decoder
-/// reads through it, so a table file with a section decodes as the table alone.
-#[inline]
-pub(crate) fn table_part(bytes: &[u8]) -> &[u8] {
-    match locate(bytes) {
-        Ok((_, table)) if !table.is_empty() => table,
-        _ => bytes,
-    }
-}
+/// The table of a file that may have sections appended (docs/FORMAT.md): every table
+/// decoder reads through it, so a table file with sections decodes as the table alone.
+pub(crate) use crate::sections::table_part;
 
 /// Parses and validates a located section (its CRC checked), calling `class` and
 /// `logit` with each class's and Bayes logit's data in order.

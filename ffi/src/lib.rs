@@ -45,6 +45,9 @@ use mlmap::{
 mod limits {
     include!(concat!(env!("OUT_DIR"), "/limits.rs"));
 }
+mod monitor;
+pub use monitor::*;
+
 use limits::{FAST_CLASSES, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES, MAX_CLASSES};
 
 /// The table type behind the opaque `mlmap_table_t`.
@@ -183,13 +186,20 @@ pub enum mlmap_status_t {
     /// Decode: the open head's epsilon is neither 0 nor in [2^-126, 1e30] (a broken
     /// table invariant, reported on its own).
     MLMAP_ERR_OPEN_EPSILON = 25,
+    /// The monitor storage holds no monitor (mlmap_monitor_init() did not succeed on it).
+    MLMAP_ERR_NO_MONITOR = 26,
+    /// The bytes hold no section of the kind asked for (a monitor section: magic MLMW).
+    MLMAP_ERR_NO_SECTION = 27,
+    /// A section breaks its format or does not belong to the table (another shape or
+    /// table CRC, a window of 0, a threshold or share out of range).
+    MLMAP_ERR_INVALID_SECTION = 28,
 }
 
 use mlmap_status_t::*;
 
 /// Statuses in code order (tests and `mlmap_status_str`).
 #[doc(hidden)]
-pub const ALL_STATUSES: [mlmap_status_t; 26] = [
+pub const ALL_STATUSES: [mlmap_status_t; 29] = [
     MLMAP_OK,
     MLMAP_ERR_NULL_POINTER,
     MLMAP_ERR_MISALIGNED,
@@ -216,6 +226,9 @@ pub const ALL_STATUSES: [mlmap_status_t; 26] = [
     MLMAP_ERR_NO_OPEN_HEAD,
     MLMAP_ERR_OPEN_TEMPERATURE,
     MLMAP_ERR_OPEN_EPSILON,
+    MLMAP_ERR_NO_MONITOR,
+    MLMAP_ERR_NO_SECTION,
+    MLMAP_ERR_INVALID_SECTION,
 ];
 
 impl From<DecodeError> for mlmap_status_t {
@@ -1332,6 +1345,9 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         23 => c"the table has no open head",
         24 => c"open head: the temperature is not in [1e-6, 1e6]",
         25 => c"open head: epsilon is neither 0 nor in [1.1754944e-38, 1e30]",
+        26 => c"the monitor storage holds no monitor",
+        27 => c"input holds no section of this kind (monitor: magic MLMW)",
+        28 => c"a section breaks its format or belongs to another table",
         _ => c"unknown mlmap status",
     };
     s.as_ptr()

@@ -119,10 +119,10 @@ static void test_limits_and_status_strings(void) {
     /* Every status has its own non-empty description; anything else is unknown. */
     const char *unknown = mlmap_status_str(-1);
     CHECK(unknown != NULL && strcmp(unknown, "unknown mlmap status") == 0);
-    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_OPEN_EPSILON + 1), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_INVALID_SECTION + 1), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MAX), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MIN), unknown) == 0);
-    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_OPEN_EPSILON; s++) {
+    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_INVALID_SECTION; s++) {
         const char *d = mlmap_status_str(s);
         CHECK(d != NULL && d[0] != '\0' && strcmp(d, unknown) != 0);
         for (int32_t t = MLMAP_OK; t < s; t++) CHECK(strcmp(d, mlmap_status_str(t)) != 0);
@@ -1125,6 +1125,104 @@ static void test_maps_golden(const char *path, const mlmap_table_t *maps_t,
     free(text);
 }
 
+/* The drift monitor (docs/DESIGN.md section 7) on tests/golden/monitor_small.mlmap
+ * (W = 50): every window of examples/data/{ood,test}.csv against the numpy reference
+ * (tools/monitor_ref.py: psi_max within a relative 1e-5, oos_rate and q_mean within
+ * 1e-5), every out-of-distribution window alarms, and the argument checks. */
+static uint64_t monitor_storage[MLMAP_MONITOR_SIZE(3, 22) / 8];
+
+static void test_monitor_log(const char *log, const char *golden, int want_alarms) {
+    size_t len, glen;
+    char *text = (char *)read_file(log, &len), *save = NULL, *f[16];
+    char *gtext = (char *)read_file(golden, &glen), *gsave = NULL, *g[16];
+    char *gline = NULL;
+    unsigned windows = 0, alarms = 0, far = 0;
+    mlmap_window_t w;
+    float psi[3];
+    uint32_t done;
+    int header = 1;
+    for (char *line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        if (header) { header = 0; continue; }
+        int n = split(line, f, 16);
+        if (n != 6) { failed++; continue; }
+        float x[3] = {strtof(f[3], NULL), strtof(f[4], NULL), strtof(f[5], NULL)};
+        EXPECT(mlmap_monitor_push(monitor_storage, x, 3, strtof(f[2], NULL), &w, psi, 3, &done),
+               MLMAP_OK);
+        if (!done) continue;
+        do gline = strtok_r(gline ? NULL : gtext, "\n", &gsave);
+        while (gline && (gline[0] == '#' || strncmp(gline, "window,", 7) == 0));
+        if (!gline || split(gline, g, 16) != 6) { failed++; continue; }
+        double psi_max = strtod(g[2], NULL), oos = strtod(g[4], NULL), q = strtod(g[5], NULL);
+        if (w.window != (uint32_t)atoi(g[0]) || w.rows != (uint32_t)atoi(g[1]) ||
+            fabs(w.psi_max - psi_max) > 1e-5 * (1.0 + psi_max) || fabs(w.oos_rate - oos) > 1e-6 ||
+            fabs(w.q_mean - q) > 1e-5 || w.psi_logit != (uint32_t)atoi(g[3]))
+            far++;
+        float top = psi[0] > psi[1] ? (psi[0] > psi[2] ? psi[0] : psi[2]) : (psi[1] > psi[2] ? psi[1] : psi[2]);
+        CHECK(same_bits(top, w.psi_max));
+        windows++;
+        alarms += w.alarm;
+        CHECK(w.alarm == (w.alarm_psi | w.alarm_oos | w.alarm_q));
+    }
+    /* The logs are whole windows: nothing is left to finish. */
+    EXPECT(mlmap_monitor_finish(monitor_storage, &w, NULL, 0, &done), MLMAP_OK);
+    CHECK(done == 0);
+    CHECK(windows > 0 && far == 0);
+    if (want_alarms >= 0) CHECK(alarms == (unsigned)want_alarms);
+    printf("monitor %s: %u windows, %u with an alarm, %u off the reference\n", log, windows, alarms, far);
+    free(text);
+    free(gtext);
+}
+
+static void test_monitor(const mlmap_table_t *t, const mlmap_table_t *no_bayes) {
+    size_t len;
+    uint8_t *bytes = read_file("tests/golden/monitor_small.mlmap", &len);
+    mlmap_window_t w;
+    uint32_t done = 7, ww;
+    float x[3] = {0.5f, 1.0f, -1.0f}, alpha, th[3];
+    CHECK(sizeof monitor_storage == MLMAP_MONITOR_SIZE(3, 22));
+    /* No monitor yet. */
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 3, 1.0f, &w, NULL, 0, &done), MLMAP_ERR_NO_MONITOR);
+    CHECK(done == 7);
+    EXPECT(mlmap_monitor_init(monitor_storage, sizeof monitor_storage, t, bytes, len - 500),
+           MLMAP_ERR_NO_SECTION);
+    EXPECT(mlmap_monitor_init(monitor_storage, sizeof monitor_storage - 4, t, bytes, len),
+           MLMAP_ERR_STORAGE_TOO_SMALL);
+    EXPECT(mlmap_monitor_init(monitor_storage, sizeof monitor_storage, no_bayes, bytes, len),
+           MLMAP_ERR_NO_BAYES_HEAD);
+    EXPECT(mlmap_monitor_init(NULL, sizeof monitor_storage, t, bytes, len), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_monitor_init((char *)monitor_storage + 4, sizeof monitor_storage - 8, t, bytes, len),
+           MLMAP_ERR_MISALIGNED);
+    bytes[len - 20] ^= 1;
+    EXPECT(mlmap_monitor_init(monitor_storage, sizeof monitor_storage, t, bytes, len), MLMAP_ERR_CORRUPTED);
+    bytes[len - 20] ^= 1;
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 3, 1.0f, &w, NULL, 0, &done), MLMAP_ERR_NO_MONITOR);
+    EXPECT(mlmap_monitor_init(monitor_storage, sizeof monitor_storage, t, bytes, len), MLMAP_OK);
+    EXPECT(mlmap_monitor_params(monitor_storage, &ww, &alpha, th), MLMAP_OK);
+    CHECK(ww == 50 && same_bits(alpha, 0.05f) && th[0] > 0.0f && th[2] < 1.0f);
+    /* Bad detections count nothing; outputs may not overlap the storage. */
+    float xnan[3] = {0.0f, NAN, 0.0f}, psi[3];
+    EXPECT(mlmap_monitor_push(monitor_storage, xnan, 3, 1.0f, &w, psi, 3, &done), MLMAP_ERR_NAN_LOGIT);
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 3, 1.5f, &w, psi, 3, &done), MLMAP_ERR_OBJECTNESS);
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 2, 1.0f, &w, psi, 3, &done), MLMAP_ERR_LENGTH);
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 3, 1.0f, &w, psi, 2, &done), MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 3, 1.0f, (mlmap_window_t *)(monitor_storage + 40), psi, 3, &done),
+           MLMAP_ERR_OVERLAP);
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 3, 1.0f, &w, psi, 3, (uint32_t *)psi), MLMAP_ERR_OVERLAP);
+    /* A partial window: reported by finish, without an alarm. */
+    EXPECT(mlmap_monitor_push(monitor_storage, x, 3, 1.0f, &w, psi, 3, &done), MLMAP_OK);
+    CHECK(done == 0);
+    float far_x[3] = {1e6f, 1e6f, 1e6f};
+    EXPECT(mlmap_monitor_push(monitor_storage, far_x, 3, 1.0f, &w, psi, 3, &done), MLMAP_OK);
+    EXPECT(mlmap_monitor_finish(monitor_storage, &w, psi, 3, &done), MLMAP_OK);
+    CHECK(done == 1 && w.rows == 2 && w.window == 0 && w.alarm == 0 && w.oos_rate == 0.5f);
+    /* The logs, from a fresh monitor. */
+    EXPECT(mlmap_monitor_init(monitor_storage, sizeof monitor_storage, t, bytes, len), MLMAP_OK);
+    test_monitor_log("examples/data/ood.csv", "tests/golden/monitor/windows_ood.csv", 40);
+    EXPECT(mlmap_monitor_init(monitor_storage, sizeof monitor_storage, t, bytes, len), MLMAP_OK);
+    test_monitor_log("examples/data/test.csv", "tests/golden/monitor/windows_test.csv", -1);
+    free(bytes);
+}
+
 int main(int argc, char **argv) {
     if (argc != 6) {
         fprintf(stderr, "usage: %s TABLE SMALL_TABLE INPUT_CSV APPLY_CSV GOLDEN_DIR\n", argv[0]);
@@ -1238,6 +1336,7 @@ int main(int argc, char **argv) {
     const char *const golden_names[3] = {"default", "small_open", "small_open_nobg"};
     const mlmap_table_t *const golden_tables[3] = {&table, &open_t, &nobg_t};
     test_open_golden(path, golden_names, golden_tables, 3);
+    test_monitor(&table, &small_t);
 
     /* Version-4 tables with recalibration maps: decoded into the same storage, every
      * head after its map against the reference. */

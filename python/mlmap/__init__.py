@@ -28,6 +28,10 @@ message the ``mlmap`` command prints for the same fault; a corrupt table raises
 ``mlmap.TableError``, a ``ValueError``; an argument of the wrong type raises
 ``TypeError``. A NaN score or logit given to ``decide`` is a ``ValueError``.
 
+The drift monitor (docs/DESIGN.md section 7): ``monitor_fit`` chooses alarm thresholds on
+in-distribution rows and returns the table file with its monitor section;
+``Monitor.from_bytes(data)`` replays detections in order, one dict per window.
+
 Fitting across processes or machines (docs/SCALE.md): ``FitStats`` (pass a) of every
 shard, merged (``+``, ``sum``); its ``edges(...)``; ``FitCounts`` (pass b) of every shard
 over those edges, merged; ``finish(stats, counts)``: the bytes ``fit`` gives on all rows.
@@ -38,12 +42,14 @@ from ._mlmap import (
     FitCounts,
     FitEdges,
     FitStats,
+    Monitor,
     Table,
     TableError,
     decide,
     evaluate,
     finish,
     fit,
+    monitor_fit,
     tune,
 )
 
@@ -53,12 +59,14 @@ __all__ = [
     "FitCounts",
     "FitEdges",
     "FitStats",
+    "Monitor",
     "Table",
     "TableError",
     "decide",
     "evaluate",
     "finish",
     "fit",
+    "monitor_fit",
     "tune",
 ]
 

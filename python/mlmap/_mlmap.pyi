@@ -312,3 +312,35 @@ class FitCounts:
 
 def finish(stats: FitStats, counts: FitCounts) -> Table:
     """The table of merged statistics and merged counts of the same rows."""
+
+class Monitor:
+    """A drift monitor (docs/DESIGN.md section 7) over a table file's monitor section."""
+
+    @staticmethod
+    def from_bytes(data: bytes | bytearray | memoryview, window: int | None = None) -> Monitor: ...
+    @staticmethod
+    def load(path: str | os.PathLike[str], window: int | None = None) -> Monitor: ...
+    @property
+    def window(self) -> int: ...
+    @property
+    def alpha(self) -> float: ...
+    @property
+    def thresholds(self) -> dict[str, float]: ...
+    @property
+    def fitted(self) -> bool: ...
+    def push(
+        self, logits: npt.ArrayLike, objectness: npt.ArrayLike | float | None = None
+    ) -> list[dict[str, Any]]: ...
+    def finish(self) -> dict[str, Any] | None: ...
+    def to_bytes(self) -> bytes: ...
+
+def monitor_fit(
+    table: Table,
+    logits: npt.ArrayLike,
+    objectness: npt.ArrayLike | float | None = None,
+    *,
+    window: int,
+    false_alarm: float,
+    windows: int = 2000,
+    seed: int = 0,
+) -> bytes: ...

@@ -16,6 +16,7 @@ mod arrays;
 mod errors;
 mod evaluate;
 mod fit;
+mod monitor;
 mod score;
 mod source;
 mod table;
@@ -89,6 +90,8 @@ fn decide<'py>(
 #[pymodule]
 fn _mlmap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<table::PyTable>()?;
+    m.add_class::<monitor::PyMonitor>()?;
+    m.add_function(wrap_pyfunction!(monitor::monitor_fit, m)?)?;
     m.add("TableError", m.py().get_type::<errors::TableError>())?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(decide, m)?)?;

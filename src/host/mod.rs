@@ -21,6 +21,7 @@ pub mod eval;
 pub mod export;
 pub mod fit;
 pub mod metrics;
+pub mod monitor;
 pub mod names;
 pub mod tune;
 

@@ -75,6 +75,9 @@ mod outputs;
 #[cfg(unix)]
 mod streams;
 
+/// `monitor fit` and `monitor`: the numpy reference's thresholds and windows, refusals.
+mod monitor;
+
 /// Messages that say what is true, and limits that refuse before the work.
 mod messages;
 

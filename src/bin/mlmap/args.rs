@@ -51,6 +51,8 @@ pub enum Command {
     ExportC(crate::cmd::export_c::ExportCArgs),
     /// Append a quantized section (int8 or int16 logits) to a table.
     Quantize(crate::cmd::quantize::QuantizeArgs),
+    /// Replay a log through the drift monitor; `monitor fit` writes its alarm thresholds.
+    Monitor(crate::cmd::monitor::MonitorArgs),
 }
 
 /// The fit settings of `fit` and of `stats` (pass a).

@@ -417,15 +417,10 @@ fn file_version(t: &DynTable) -> u16 {
     }
 }
 
-/// The file's table bytes and its quantized section, if it has one.
+/// The file's table bytes (before every section) and its quantized section, if it has
+/// one.
 fn split(bytes: &[u8]) -> (&[u8], Option<DynQTable<'_>>) {
-    match DynQTable::from_bytes(bytes) {
-        Ok(q) => (
-            bytes.get(..bytes.len() - q.section_len()).unwrap_or(bytes),
-            Some(q),
-        ),
-        Err(_) => (bytes, None),
-    }
+    (mlmap::table_of(bytes), DynQTable::from_bytes(bytes).ok())
 }
 
 /// The JSON report.
@@ -434,6 +429,7 @@ fn render_json(
     t: &DynTable,
     bytes: &[u8],
     quantized: Option<&DynQTable<'_>>,
+    monitor: serde_json::Value,
 ) -> String {
     let st = t.settings();
     let names: Vec<&str> = t.class_names().collect();
@@ -484,23 +480,70 @@ fn render_json(
             })
             .collect::<serde_json::Map<String, serde_json::Value>>(),
         "quantized": quantized.map(|q| quantized_json(q, &names)),
+        "monitor": monitor,
     });
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
     s
 }
 
+/// The monitor section (DESIGN §7): its settings as text and JSON (`null` without one).
+fn monitor_info(file: &[u8], table: &DynTable) -> (Option<String>, serde_json::Value) {
+    let Some(section) = mlmap::section_of(file, mlmap::MONITOR_MAGIC) else {
+        return (None, serde_json::Value::Null);
+    };
+    match mlmap::MonitorSpec::from_bytes(file, &table.view()) {
+        Ok(spec) => {
+            let p = spec.params();
+            let t = p.thresholds;
+            let q = spec.has_q().then_some(t.q);
+            let text = format!(
+                "monitor    section {} bytes (CRC-32 verified): windows of {} detections, \
+                 alpha {}; alarm when psi_max > {}, oos_rate > {}{}\n",
+                section.len(),
+                p.window,
+                p.alpha,
+                t.psi,
+                t.oos,
+                q.map_or_else(String::new, |q| format!(", q_mean < {q}"))
+            );
+            let num = |v: f32| {
+                if v.is_finite() {
+                    serde_json::json!(v)
+                } else {
+                    serde_json::Value::Null
+                }
+            };
+            let json = serde_json::json!({
+                "bytes": section.len(),
+                "window": p.window,
+                "alpha": p.alpha,
+                "thresholds": {"psi": num(t.psi), "oos": num(t.oos), "q": q.map(num)},
+            });
+            (Some(text), json)
+        }
+        Err(e) => (
+            Some(format!("monitor    section refused: {e}\n")),
+            serde_json::json!({ "error": e.to_string() }),
+        ),
+    }
+}
+
 pub fn run(args: &InspectArgs) -> Result<()> {
     let (table, file) = read_table(&args.table)?;
     let (bytes, quantized) = split(&file);
+    let (monitor_text, monitor_json) = monitor_info(&file, &table);
     let text = match args.format {
-        Format::Json => render_json(&args.table, &table, bytes, quantized.as_ref()),
+        Format::Json => render_json(&args.table, &table, bytes, quantized.as_ref(), monitor_json),
         Format::Text | Format::Markdown => {
             let mut s = render_text(&args.table, &table, bytes, args.bins);
             if let Some(q) = &quantized {
                 let shown: Vec<Cow<'_, str>> = table.class_names().map(visible).collect();
                 let names: Vec<&str> = shown.iter().map(AsRef::as_ref).collect();
                 quantized_text(&mut s, q, &names);
+            }
+            if let Some(m) = monitor_text {
+                s.push_str(&m);
             }
             s
         }

@@ -9,6 +9,7 @@ pub mod export_c;
 pub mod fit;
 pub mod inspect;
 pub mod merge;
+pub mod monitor;
 pub mod quantize;
 pub mod stats;
 pub mod tune;
@@ -29,5 +30,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo(a) => demo::run(a),
         Command::ExportC(a) => export_c::run(a),
         Command::Quantize(a) => quantize::run(a),
+        Command::Monitor(a) => monitor::run(a),
     }
 }

@@ -67,9 +67,9 @@ fn per_class<T: Copy>(flag: &str, values: &[T], k: usize) -> Result<Vec<T>> {
 pub fn run(args: &QuantizeArgs) -> Result<()> {
     output::check_outputs(&args.output, &[&args.table])?;
     let (table, bytes) = read_table(&args.table)?;
-    // A table that already carries a section is quantized from its table part.
-    let table_len =
-        DynQTable::from_bytes(&bytes).map_or(bytes.len(), |q| bytes.len() - q.section_len());
+    // A table that already carries sections is quantized from its table part; its
+    // monitor and conformal sections (DESIGN §7, §8) follow the new quantized section.
+    let table_len = mlmap::table_of(&bytes).len();
     let k = table.k();
     let scales = per_class("scale", &args.scale, k)?;
     let zero_points = per_class("zero-point", &args.zero_point, k)?;
@@ -85,6 +85,11 @@ pub fn run(args: &QuantizeArgs) -> Result<()> {
     let mut out = bytes.get(..table_len).unwrap_or_default().to_vec();
     out.resize(table_len + n, 0);
     quantize_into(&view, &params, out.get_mut(table_len..).unwrap_or_default()).map_err(bad)?;
+    for magic in [mlmap::MONITOR_MAGIC, *b"MLMS"] {
+        if let Some(section) = mlmap::section_of(&bytes, magic) {
+            out.extend_from_slice(section);
+        }
+    }
     // What was written reads back (the same checks as the device's).
     let q = DynQTable::from_bytes(&out).map_err(|e| {
         CliError::internal(&args.output, format!("section does not read back: {e}"))

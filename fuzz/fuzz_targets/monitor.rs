@@ -1,0 +1,108 @@
+//! The drift monitor (DESIGN §7): any bytes appended to the shipped table either fail to
+//! read as a monitor section or give a monitor whose windows keep the invariants of
+//! DESIGN §7 for any detections: each logit's counts sum to the window's rows, every
+//! metric finite and non-negative (`oos_rate` and `q_mean` at most 1), no alarm on a
+//! partial window; the fixed-size `Monitor` and the slice functions agree bit for bit.
+//!
+//! Input: a `u16` section length `n`, `n` section bytes (tried as given and with a valid
+//! trailer), then detections of three `f32` logits and one objectness byte.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use mlmap::host::monitor::DynMonitor;
+use mlmap::{Monitor, MonitorSpec, Table};
+
+type Shipped = Table<3, 22, 17, 22, 4>;
+const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
+
+fuzz_target!(|data: &[u8]| {
+    let Some((len, rest)) = data.split_first_chunk::<2>() else {
+        return;
+    };
+    let n = usize::from(u16::from_le_bytes(*len)).min(rest.len());
+    let (section, detections) = rest.split_at(n);
+    let Ok(table) = Shipped::from_bytes(SHIPPED) else {
+        panic!("the shipped table decodes");
+    };
+    for s in [section.to_vec(), with_valid_trailer(section)] {
+        let mut file = SHIPPED.to_vec();
+        file.extend_from_slice(&s);
+        if let Ok(spec) = MonitorSpec::from_bytes(&file, &table.view()) {
+            // A file with a monitor section still reads as its table.
+            assert!(Shipped::from_bytes(&file).is_ok());
+            run(&spec, detections);
+        }
+    }
+});
+
+fn run(spec: &MonitorSpec<'_>, detections: &[u8]) {
+    let Ok(mut fixed) = Monitor::<'_, 3, 22, 4>::new(spec) else {
+        panic!("the section's shape is the table's");
+    };
+    let mut dynamic = DynMonitor::new(spec);
+    for d in detections.chunks_exact(13) {
+        let x = [0, 1, 2].map(|i| {
+            let b: [u8; 4] = d[4 * i..4 * i + 4].try_into().unwrap_or_default();
+            f32::from_le_bytes(b)
+        });
+        let os = f32::from(d[12]) / 255.0;
+        let a = fixed.push(&x, os);
+        let b = dynamic.push(spec, &x, os);
+        assert_eq!(
+            a.as_ref().map(|r| r.map(|w| (w.summary, w.psi.to_vec()))),
+            b.as_ref().map(|r| r.clone())
+        );
+        if let Ok(Some(w)) = a {
+            check(&w.summary, &w.psi, spec.params().window);
+        }
+        let rows = fixed.accumulators().rows;
+        for j in 0..3 {
+            let Some((below, bins, above)) = fixed.counts(j) else {
+                panic!("logit {j} has counts");
+            };
+            assert_eq!(below + bins.iter().sum::<u32>() + above, rows);
+        }
+    }
+    if let Some(w) = fixed.flush() {
+        assert!(!w.summary.alarms.any() || w.summary.rows == spec.params().window);
+        check(&w.summary, &w.psi, spec.params().window);
+    }
+}
+
+fn check(s: &mlmap::WindowSummary, psi: &[f32], window: u32) {
+    assert!(s.rows >= 1 && s.rows <= window);
+    assert!(psi.iter().all(|p| p.is_finite() && *p >= 0.0));
+    assert!(s.psi_max.is_finite() && s.psi_max >= 0.0);
+    assert!((0.0..=1.0).contains(&s.oos_rate));
+    if let Some(q) = s.q_mean {
+        assert!((0.0..=1.0 + 1e-6).contains(&q), "q_mean {q}");
+    }
+    if s.rows < window {
+        assert!(!s.alarms.any());
+    }
+}
+
+/// `bytes` with the trailer's length set to the whole input and its CRC recomputed.
+fn with_valid_trailer(bytes: &[u8]) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    if b.len() < 8 {
+        return b;
+    }
+    let n = b.len();
+    let len = u32::try_from(n).unwrap_or(u32::MAX).to_le_bytes();
+    b[n - 8..n - 4].copy_from_slice(&len);
+    let crc = crc32(&b[..n - 4]);
+    b[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    b
+}
+
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &byte in bytes {
+        crc ^= u32::from(byte);
+        for _ in 0..8 {
+            crc = (crc >> 1) ^ (0xedb8_8320 & (crc & 1).wrapping_neg());
+        }
+    }
+    !crc
+}
