@@ -379,6 +379,7 @@ fn random_table(seed: u64, n: usize) -> (DynTable, Loaded) {
         bayes: Some(mlmap::host::fit::BayesParams {
             bins: 9,
             lambda: 1e-3,
+            objectness: false,
         }),
         ..FitParams::default()
     };

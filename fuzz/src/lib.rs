@@ -867,6 +867,9 @@ pub struct ArbBayes<const K: usize, const BB: usize, const C: usize> {
     weights: [[[u16; BB]; K]; C],
     /// A term to overwrite with any bits (index into the terms, then the bits).
     hostile: Option<(u16, u32)>,
+    /// The objectness feature (DESIGN §1.6): its axis (start, span) and per category
+    /// integer weights of its bins.
+    objectness: Option<((Real, Real), [[u16; BB]; C])>,
 }
 
 /// The Bayes head's smoothing from fuzz input.
@@ -904,6 +907,24 @@ impl<const K: usize, const BB: usize, const C: usize> ArbBayes<K, BB, C> {
             let n = terms.len();
             terms[usize::from(i) % n] = f32::from_bits(bits);
         }
+        // The feature's terms: bin-major, then category.
+        let objectness = self.objectness.as_ref().map(|((lo, span), weights)| {
+            let span = span.positive();
+            let span = if span == 0.0 { 1.0 } else { span };
+            let mut t = Vec::with_capacity(BB * C);
+            for b in 0..BB {
+                for w in weights {
+                    let total: u64 = w.iter().map(|&v| u64::from(v)).sum();
+                    let h = if total == 0 {
+                        1.0 / BB as f64
+                    } else {
+                        f64::from(w[b]) / total as f64
+                    };
+                    t.push((h + f64::from(lambda)).ln() as f32);
+                }
+            }
+            ((lo.get(), lo.get() + span), t)
+        });
         BayesSpec {
             lambda,
             // 0 rows (invalid) only for `u32::MAX`, a span of 0 (invalid) made 1: most
@@ -923,6 +944,7 @@ impl<const K: usize, const BB: usize, const C: usize> ArbBayes<K, BB, C> {
                 })
                 .collect(),
             terms,
+            objectness,
         }
     }
 
@@ -942,6 +964,14 @@ impl<const K: usize, const BB: usize, const C: usize> ArbBayes<K, BB, C> {
                 invariants::check_bayes_terms(c, j, spec.lambda, terms, BB).is_ok()
             })
         });
+        if spec.objectness.is_some() {
+            // The objectness feature (DESIGN §1.6): checked on its own (the checks below
+            // are written for heads without it); no table for them.
+            if let Ok(d) = DynTable::from_table(table).with_bayes(spec.clone()) {
+                check_objectness_feature::<K, B_ML, B_MAP, BB, C>(&d);
+            }
+            return None;
+        }
         match DynTable::from_table(table).with_bayes(spec.clone()) {
             Ok(d) => {
                 assert!(
@@ -957,6 +987,39 @@ impl<const K: usize, const BB: usize, const C: usize> ArbBayes<K, BB, C> {
             }
             Err(_) => None,
         }
+    }
+}
+
+/// A table with the objectness feature (DESIGN §1.6): its bytes decode to the same table
+/// (version 4), the fixed-size type with `F = 1` scores the Bayes head bit for bit as
+/// the host's table for objectness values across the axis and both ends, every score in
+/// `[0, OS]` and their sum at most `OS`; a type without room refuses it.
+pub fn check_objectness_feature<
+    const K: usize,
+    const B_ML: usize,
+    const B_MAP: usize,
+    const BB: usize,
+    const C: usize,
+>(
+    d: &DynTable,
+) {
+    let bytes = d.to_vec().expect("a valid table encodes");
+    assert_eq!(bytes[4], 4, "the objectness feature is format version 4");
+    assert_eq!(&DynTable::from_bytes(&bytes).expect("decodes"), d);
+    assert_eq!(
+        Table::<K, B_ML, B_MAP, BB, C>::from_bytes(&bytes).err(),
+        Some(mlmap::DecodeError::ObjectnessMismatch { found: true })
+    );
+    let t = Table::<K, B_ML, B_MAP, BB, C, 0, 1>::from_bytes(&bytes).expect("room for it");
+    let x = [0.0f32; K];
+    let (mut out, mut scratch) = ([0.0f32; K], [0.0f32; C]);
+    for os in [0.0f32, 1e-30, 0.1, 0.5, 0.9, 1.0 - f32::EPSILON, 1.0] {
+        let s = t.bayes(&x, os).expect("a valid detection");
+        d.bayes_into::<mlmap::FastMath>(&x, os, &mut out, &mut scratch)
+            .expect("a valid detection");
+        assert_eq!(s.0.map(f32::to_bits), out.map(f32::to_bits), "OS = {os:e}");
+        assert!(s.0.iter().all(|&v| (0.0..=os).contains(&v)), "{s:?}");
+        assert!(s.0.iter().sum::<f32>() <= os * (1.0 + 1e-5), "{s:?}");
     }
 }
 
