@@ -112,6 +112,7 @@ impl Format for InferError {
             Self::NoBayesHead => write!(f, "NoBayesHead"),
             Self::NoOpenHead => write!(f, "NoOpenHead"),
             Self::CodeRange { class } => write!(f, "CodeRange({})", class),
+            Self::NanScore { class } => write!(f, "NanScore({})", class),
         }
     }
 }

@@ -295,6 +295,11 @@ pub enum InferError {
         /// Index of the first such code.
         class: u16,
     },
+    /// A score given to a conformal set is NaN.
+    NanScore {
+        /// Index of the first NaN score.
+        class: u16,
+    },
 }
 
 impl fmt::Display for InferError {
@@ -312,6 +317,7 @@ impl fmt::Display for InferError {
                 f,
                 "quantized logit of class {class} is outside the section's code range"
             ),
+            Self::NanScore { class } => write!(f, "score of class {class} is NaN"),
         }
     }
 }
