@@ -426,8 +426,8 @@ fn set_errors_and_the_u64_form() {
         .set64(&v, &[6.0, -3.0, -3.0], 1.0, &mut s, &mut scratch)
         .unwrap();
     let mut want = 0u64;
-    for c in 0..3 {
-        if s[c] >= spec.threshold(c).unwrap() {
+    for (c, &score) in s.iter().enumerate() {
+        if score >= spec.threshold(c).unwrap() {
             want |= 1 << c;
         }
     }
@@ -444,8 +444,10 @@ fn set_errors_and_the_u64_form() {
 
 /// The default table's scores of the pooled validation and test rows (exchangeable:
 /// one generator), per head, computed once.
-fn pooled(head: Head) -> &'static (Vec<f32>, Vec<Option<usize>>) {
-    static P: OnceLock<Vec<(Head, (Vec<f32>, Vec<Option<usize>>))>> = OnceLock::new();
+type Pooled = (Vec<f32>, Vec<Option<usize>>);
+
+fn pooled(head: Head) -> &'static Pooled {
+    static P: OnceLock<Vec<(Head, Pooled)>> = OnceLock::new();
     let all = P.get_or_init(|| {
         let (table, _) = default_table();
         [Head::Map, Head::Open]
