@@ -412,6 +412,11 @@ def main():
                      (0.25, 0.25, 0.25, 128)) * 30)
     write("monitor", "section_and_detections.bin", struct.pack("<H", m) + mon[-m:] + dets)
     write("monitor", "section_header.bin", struct.pack("<H", 60) + mon[-m:][:52] + mon[-8:] + dets[:39])
+    # the same target reads a conformal section (the open head's, alpha 0.1)
+    with open(os.path.join(ROOT, "tests", "golden", "conformal_small.mlmap"), "rb") as f:
+        conf = f.read()
+    c = struct.unpack("<I", conf[-8:-4])[0]
+    write("monitor", "conformal_and_detections.bin", struct.pack("<H", c) + conf[-c:] + dets)
 
     # csv (the target is built once the reader lands; see fuzz_targets/csv.rs)
     with open(os.path.join(ROOT, "examples", "data", "test.csv"), "rb") as f:

@@ -86,6 +86,12 @@ typedef struct mlmap_table {
 #define MLMAP_MONITOR_SIZE(k, bins) \
   ((size_t)256 + 4 * (size_t)(k) * ((size_t)(bins) + 2))
 
+/**
+ * Words of a conformal set's bitmask (docs/DESIGN.md section 8) for `k` classes:
+ * class `c` is bit `c % 32` of word `c / 32`.
+ */
+#define MLMAP_SET_WORDS(k) (((size_t)(k) + 31) / 32)
+
 
 /**
  * Alignment of `mlmap_table_t` in bytes.
@@ -96,6 +102,16 @@ typedef struct mlmap_table {
  * Longest class name in bytes, without the terminating NUL.
  */
 #define MLMAP_NAME_MAX 31
+
+/**
+ * Bytes of a conformal handle's storage.
+ */
+#define MLMAP_CONFORMAL_SIZE 64
+
+/**
+ * Alignment of a conformal handle's storage in bytes.
+ */
+#define MLMAP_CONFORMAL_ALIGN 8
 
 /**
  * Bytes of the fixed part of a monitor's storage (its spec and running sums); the
@@ -243,7 +259,8 @@ enum mlmap_status_t
    */
   MLMAP_ERR_NO_MONITOR = 26,
   /**
-   * The bytes hold no section of the kind asked for (a monitor section: magic MLMW).
+   * The bytes hold no section of the kind asked for (a monitor section: magic MLMW;
+   * a conformal section: magic MLMS).
    */
   MLMAP_ERR_NO_SECTION = 27,
   /**
@@ -251,6 +268,11 @@ enum mlmap_status_t
    * table CRC, a window of 0, a threshold or share out of range).
    */
   MLMAP_ERR_INVALID_SECTION = 28,
+  /**
+   * The conformal storage holds no conformal handle (mlmap_conformal_init() did not
+   * succeed on it).
+   */
+  MLMAP_ERR_NO_CONFORMAL = 29,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -760,6 +782,86 @@ mlmap_status_t mlmap_decide(const float *scores,
  * @return The description.
  */
 const char *mlmap_status_str(int32_t status);
+
+/**
+ * Initialises a conformal handle in `conformal` for `table` from the conformal section
+ * in `bytes` (a table file with the section, as written by `mlmap conformal`, or the
+ * section alone).
+ *
+ * Checks the section as the Rust `ConformalSpec::from_bytes` does: the magic, the CRC,
+ * the version, that the table has the section's head, K, the table's CRC when the
+ * table precedes the section, alpha, and every threshold against its calibration rows.
+ *
+ * Lifetime: the handle keeps pointers into `table` and `bytes`: both must stay in place
+ * and unchanged while it is used. On failure the storage holds no handle.
+ *
+ * @param[out] conformal Storage of `MLMAP_CONFORMAL_SIZE` bytes aligned to
+ *   `MLMAP_CONFORMAL_ALIGN`.
+ * @param conformal_size Its size in bytes (`MLMAP_ERR_STORAGE_TOO_SMALL` when too small).
+ * @param table A decoded table.
+ * @param bytes The bytes holding the conformal section; they must not overlap the handle.
+ * @param len Number of bytes.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_TOO_LARGE`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NO_SECTION`, `MLMAP_ERR_CORRUPTED`,
+ *   `MLMAP_ERR_UNSUPPORTED_VERSION`, `MLMAP_ERR_NO_BAYES_HEAD`, `MLMAP_ERR_NO_OPEN_HEAD`
+ *   (the section's head is not in the table), `MLMAP_ERR_INVALID_SECTION`.
+ */
+mlmap_status_t mlmap_conformal_init(void *conformal,
+                                    size_t conformal_size,
+                                    const mlmap_table_t *table,
+                                    const uint8_t *bytes,
+                                    size_t len);
+
+/**
+ * Scores one detection with the section's head (the library's default backend for it,
+ * as mlmap_score() and the Rust `Table` methods) into `scores` and writes its conformal
+ * set into `mask`: bit `c % 32` of `mask[c / 32]` is 1 when class `c` is in the set
+ * (its score at or above its threshold). An empty set with the open head, or a table
+ * with a background category, means "not a known object".
+ *
+ * Work: the head's scoring, then K comparisons. No allocation, bounded time.
+ *
+ * @param conformal A handle from mlmap_conformal_init().
+ * @param logits K logits; they may lie anywhere (copied first).
+ * @param n_logits K (`MLMAP_ERR_LENGTH` otherwise).
+ * @param objectness In [0, 1] (`MLMAP_ERR_OBJECTNESS`).
+ * @param[out] scores K floats: the head's scores.
+ * @param scores_len Floats at `scores` (`MLMAP_ERR_BUFFER_TOO_SMALL` below K).
+ * @param[out] mask `(K + 31) / 32` words: the set.
+ * @param mask_len Words at `mask` (`MLMAP_ERR_BUFFER_TOO_SMALL` below `(K + 31) / 32`).
+ * @param[out] size The number of classes in the set.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_CONFORMAL`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS` (nothing is
+ *   written then).
+ */
+mlmap_status_t mlmap_conformal_set(const void *conformal,
+                                   const float *logits,
+                                   size_t n_logits,
+                                   float objectness,
+                                   float *scores,
+                                   size_t scores_len,
+                                   uint32_t *mask,
+                                   size_t mask_len,
+                                   uint32_t *size);
+
+/**
+ * The handle's level, head and thresholds.
+ *
+ * @param conformal A handle from mlmap_conformal_init().
+ * @param[out] alpha Receives alpha.
+ * @param[out] head Receives the head: 0 ML, 1 MAP, 2 Bayes, 3 open.
+ * @param[out] thresholds Receives K thresholds (`-INFINITY`: the class is in every set).
+ * @param thresholds_len Floats at `thresholds` (`MLMAP_ERR_BUFFER_TOO_SMALL` below K).
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_CONFORMAL`, `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_conformal_params(const void *conformal,
+                                      float *alpha,
+                                      uint32_t *head,
+                                      float *thresholds,
+                                      size_t thresholds_len);
 
 /**
  * Initialises a drift monitor in `monitor` for `table` from the monitor section in

@@ -91,7 +91,12 @@ pub use mlmap_core::{
     QTableError, QuantizeError, MAX_LOG_TERM, MAX_MASS, QUANTIZED_MAGIC, QUANTIZED_VERSION,
 };
 
-// Runtime safety: the drift monitor (DESIGN §7) and the sections appended to a table.
+// Runtime safety: the drift monitor (DESIGN §7), the conformal class sets (DESIGN §8)
+// and the sections appended to a table.
+pub use mlmap_core::{
+    conformal_section_len, set_words, threshold_rank, write_conformal_section, ConformalError,
+    ConformalSpec, CONFORMAL_MAGIC, CONFORMAL_VERSION,
+};
 pub use mlmap_core::{
     monitor_section_len, section_of, table_of, write_monitor_section, Accumulators, Alarms,
     Monitor, MonitorError, MonitorParams, MonitorSpec, MonitorState, Thresholds, WindowReport,

@@ -56,3 +56,9 @@ mod cli_decisions;
 /// thresholds; the section's checks; counts and PSI properties.
 #[cfg(feature = "std")]
 mod monitor;
+
+/// The conformal class sets (DESIGN §8) against the numpy reference: thresholds, sets,
+/// coverage and the LAC baseline; the section's checks; coverage, monotonicity and
+/// empty-set properties.
+#[cfg(feature = "std")]
+mod conformal;

@@ -134,7 +134,7 @@ impl Format for InferError {
     fn format(&self, f: Formatter<'_>) {
         let m = self.message();
         match *self {
-            Self::NanLogit { class } | Self::CodeRange { class } => {
+            Self::NanLogit { class } | Self::CodeRange { class } | Self::NanScore { class } => {
                 write!(f, "{=str} (class {})", m, class)
             }
             Self::Objectness

@@ -413,6 +413,11 @@ pub enum InferError {
         /// Index of the first such code.
         class: u16,
     },
+    /// A score given to a conformal set is NaN.
+    NanScore {
+        /// Index of the first NaN score.
+        class: u16,
+    },
 }
 
 impl InferError {
@@ -426,6 +431,7 @@ impl InferError {
             Self::NoBayesHead => "the table has no Bayes head",
             Self::NoOpenHead => "the table has no open head",
             Self::CodeRange { .. } => "a quantized logit is outside the section's code range",
+            Self::NanScore { .. } => "a score is NaN",
         }
     }
 }
@@ -443,6 +449,7 @@ impl fmt::Display for InferError {
                 f,
                 "quantized logit of class {class} is outside the section's code range"
             ),
+            Self::NanScore { class } => write!(f, "score of class {class} is NaN"),
         }
     }
 }

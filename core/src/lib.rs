@@ -29,6 +29,7 @@ extern crate std;
 pub mod baseline;
 mod bayes;
 mod bounded;
+mod conformal;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
 #[cfg(feature = "alloc")]
@@ -71,6 +72,10 @@ mod wire;
 
 pub use bayes::{objectness_logit, BayesView, MAX_LAMBDA_BAYES};
 pub use bounded::{Bounded, BoundedTable};
+pub use conformal::{
+    conformal_section_len, set_words, threshold_rank, write_conformal_section, ConformalError,
+    ConformalSpec, CONFORMAL_MAGIC, CONFORMAL_VERSION,
+};
 pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, MapError, TableError};
 pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
 pub use histogram::{

@@ -45,7 +45,9 @@ use mlmap::{
 mod limits {
     include!(concat!(env!("OUT_DIR"), "/limits.rs"));
 }
+mod conformal;
 mod monitor;
+pub use conformal::*;
 pub use monitor::*;
 
 use limits::{FAST_CLASSES, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES, MAX_CLASSES};
@@ -188,18 +190,22 @@ pub enum mlmap_status_t {
     MLMAP_ERR_OPEN_EPSILON = 25,
     /// The monitor storage holds no monitor (mlmap_monitor_init() did not succeed on it).
     MLMAP_ERR_NO_MONITOR = 26,
-    /// The bytes hold no section of the kind asked for (a monitor section: magic MLMW).
+    /// The bytes hold no section of the kind asked for (a monitor section: magic MLMW;
+    /// a conformal section: magic MLMS).
     MLMAP_ERR_NO_SECTION = 27,
     /// A section breaks its format or does not belong to the table (another shape or
     /// table CRC, a window of 0, a threshold or share out of range).
     MLMAP_ERR_INVALID_SECTION = 28,
+    /// The conformal storage holds no conformal handle (mlmap_conformal_init() did not
+    /// succeed on it).
+    MLMAP_ERR_NO_CONFORMAL = 29,
 }
 
 use mlmap_status_t::*;
 
 /// Statuses in code order (tests and `mlmap_status_str`).
 #[doc(hidden)]
-pub const ALL_STATUSES: [mlmap_status_t; 29] = [
+pub const ALL_STATUSES: [mlmap_status_t; 30] = [
     MLMAP_OK,
     MLMAP_ERR_NULL_POINTER,
     MLMAP_ERR_MISALIGNED,
@@ -229,6 +235,7 @@ pub const ALL_STATUSES: [mlmap_status_t; 29] = [
     MLMAP_ERR_NO_MONITOR,
     MLMAP_ERR_NO_SECTION,
     MLMAP_ERR_INVALID_SECTION,
+    MLMAP_ERR_NO_CONFORMAL,
 ];
 
 impl From<DecodeError> for mlmap_status_t {
@@ -259,6 +266,7 @@ impl From<InferError> for mlmap_status_t {
             InferError::Objectness => MLMAP_ERR_OBJECTNESS,
             InferError::NoBayesHead => MLMAP_ERR_NO_BAYES_HEAD,
             InferError::NoOpenHead => MLMAP_ERR_NO_OPEN_HEAD,
+            InferError::NanScore { .. } => MLMAP_ERR_NAN_SCORE,
             _ => MLMAP_ERR_LENGTH,
         }
     }
@@ -1346,8 +1354,9 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         24 => c"open head: the temperature is not in [1e-6, 1e6]",
         25 => c"open head: epsilon is neither 0 nor in [1.1754944e-38, 1e30]",
         26 => c"the monitor storage holds no monitor",
-        27 => c"input holds no section of this kind (monitor: magic MLMW)",
+        27 => c"input holds no section of this kind (monitor: magic MLMW; conformal: magic MLMS)",
         28 => c"a section breaks its format or belongs to another table",
+        29 => c"the conformal storage holds no conformal handle",
         _ => c"unknown mlmap status",
     };
     s.as_ptr()

@@ -119,10 +119,10 @@ static void test_limits_and_status_strings(void) {
     /* Every status has its own non-empty description; anything else is unknown. */
     const char *unknown = mlmap_status_str(-1);
     CHECK(unknown != NULL && strcmp(unknown, "unknown mlmap status") == 0);
-    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_INVALID_SECTION + 1), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_NO_CONFORMAL + 1), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MAX), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MIN), unknown) == 0);
-    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_INVALID_SECTION; s++) {
+    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_NO_CONFORMAL; s++) {
         const char *d = mlmap_status_str(s);
         CHECK(d != NULL && d[0] != '\0' && strcmp(d, unknown) != 0);
         for (int32_t t = MLMAP_OK; t < s; t++) CHECK(strcmp(d, mlmap_status_str(t)) != 0);
@@ -1223,6 +1223,77 @@ static void test_monitor(const mlmap_table_t *t, const mlmap_table_t *no_bayes) 
     free(bytes);
 }
 
+/* Conformal class sets (docs/DESIGN.md section 8) on tests/golden/conformal_small.mlmap
+ * (the open head at alpha 0.1): the thresholds within 1e-5 of the numpy reference
+ * (tools/conformal_ref.py), the sets of the first test rows equal to its sets wherever no
+ * score lies within 1e-5 of its threshold, and the argument checks. */
+static uint64_t conformal_storage[MLMAP_CONFORMAL_SIZE / 8];
+
+static void test_conformal(const mlmap_table_t *t, const mlmap_table_t *no_bayes) {
+    size_t len, glen, dlen;
+    uint8_t *bytes = read_file("tests/golden/conformal_small.mlmap", &len);
+    char *gtext = (char *)read_file("tests/golden/conformal/sets_open_0.1.csv", &glen);
+    char *dtext = (char *)read_file("examples/data/test.csv", &dlen);
+    float x[3] = {4.0f, -1.0f, -2.0f}, s[3], th[3], alpha;
+    uint32_t mask[MLMAP_SET_WORDS(3)], size = 7, head;
+    CHECK(MLMAP_SET_WORDS(3) == 1 && MLMAP_SET_WORDS(33) == 2);
+    EXPECT(mlmap_conformal_set(conformal_storage, x, 3, 1.0f, s, 3, mask, 1, &size), MLMAP_ERR_NO_CONFORMAL);
+    CHECK(size == 7);
+    EXPECT(mlmap_conformal_init(conformal_storage, sizeof conformal_storage, t, bytes, len - 52),
+           MLMAP_ERR_NO_SECTION);
+    EXPECT(mlmap_conformal_init(conformal_storage, sizeof conformal_storage - 8, t, bytes, len),
+           MLMAP_ERR_STORAGE_TOO_SMALL);
+    EXPECT(mlmap_conformal_init(conformal_storage, sizeof conformal_storage, no_bayes, bytes, len),
+           MLMAP_ERR_NO_OPEN_HEAD);
+    EXPECT(mlmap_conformal_init(NULL, sizeof conformal_storage, t, bytes, len), MLMAP_ERR_NULL_POINTER);
+    bytes[len - 20] ^= 1;
+    EXPECT(mlmap_conformal_init(conformal_storage, sizeof conformal_storage, t, bytes, len), MLMAP_ERR_CORRUPTED);
+    bytes[len - 20] ^= 1;
+    EXPECT(mlmap_conformal_init(conformal_storage, sizeof conformal_storage, t, bytes, len), MLMAP_OK);
+    EXPECT(mlmap_conformal_params(conformal_storage, &alpha, &head, th, 3), MLMAP_OK);
+    CHECK(same_bits(alpha, 0.1f) && head == 3);
+    EXPECT(mlmap_conformal_params(conformal_storage, &alpha, &head, th, 2), MLMAP_ERR_BUFFER_TOO_SMALL);
+    /* Bad detections and buffers write nothing. */
+    float xnan[3] = {0.0f, NAN, 0.0f};
+    EXPECT(mlmap_conformal_set(conformal_storage, xnan, 3, 1.0f, s, 3, mask, 1, &size), MLMAP_ERR_NAN_LOGIT);
+    EXPECT(mlmap_conformal_set(conformal_storage, x, 3, 1.5f, s, 3, mask, 1, &size), MLMAP_ERR_OBJECTNESS);
+    EXPECT(mlmap_conformal_set(conformal_storage, x, 2, 1.0f, s, 3, mask, 1, &size), MLMAP_ERR_LENGTH);
+    EXPECT(mlmap_conformal_set(conformal_storage, x, 3, 1.0f, s, 2, mask, 1, &size), MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(mlmap_conformal_set(conformal_storage, x, 3, 1.0f, s, 3, mask, 0, &size), MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(mlmap_conformal_set(conformal_storage, x, 3, 1.0f, s, 3, (uint32_t *)s, 1, &size), MLMAP_ERR_OVERLAP);
+    EXPECT(mlmap_conformal_set(conformal_storage, x, 3, 1.0f, s, 3, (uint32_t *)conformal_storage, 1, &size),
+           MLMAP_ERR_OVERLAP);
+    CHECK(size == 7);
+    /* The first test rows against numpy. */
+    char *save = NULL, *gsave = NULL, *f[16], *g[16];
+    char *line = strtok_r(dtext, "\n", &save); /* header */
+    unsigned rows = 0, compared = 0, off = 0;
+    for (char *gline = strtok_r(gtext, "\n", &gsave); gline; gline = strtok_r(NULL, "\n", &gsave)) {
+        if (gline[0] == '#' || strncmp(gline, "row,", 4) == 0) continue;
+        if (split(gline, g, 16) != 6) { failed++; continue; }
+        line = strtok_r(NULL, "\n", &save);
+        if (!line || split(line, f, 16) != 6) { failed++; break; }
+        float xr[3] = {strtof(f[3], NULL), strtof(f[4], NULL), strtof(f[5], NULL)};
+        EXPECT(mlmap_conformal_set(conformal_storage, xr, 3, strtof(f[2], NULL), s, 3, mask, 1, &size), MLMAP_OK);
+        CHECK(size == (uint32_t)__builtin_popcount(mask[0]));
+        for (int c = 0; c < 3; c++) {
+            double want = strtod(g[3 + c], NULL);
+            if (fabs(th[c] - want) > 1e-5) off++;
+            CHECK(((mask[0] >> c) & 1u) == (s[c] >= th[c]));
+        }
+        rows++;
+        if (strtod(g[2], NULL) > 1e-5) {
+            compared++;
+            if (mask[0] != (uint32_t)atoi(g[1])) off++;
+        }
+    }
+    CHECK(rows == 12 && compared >= 10 && off == 0);
+    printf("conformal: %u rows, %u compared with numpy, %u off\n", rows, compared, off);
+    free(bytes);
+    free(gtext);
+    free(dtext);
+}
+
 int main(int argc, char **argv) {
     if (argc != 6) {
         fprintf(stderr, "usage: %s TABLE SMALL_TABLE INPUT_CSV APPLY_CSV GOLDEN_DIR\n", argv[0]);
@@ -1337,6 +1408,7 @@ int main(int argc, char **argv) {
     const mlmap_table_t *const golden_tables[3] = {&table, &open_t, &nobg_t};
     test_open_golden(path, golden_names, golden_tables, 3);
     test_monitor(&table, &small_t);
+    test_conformal(&table, &small_t);
 
     /* Version-4 tables with recalibration maps: decoded into the same storage, every
      * head after its map against the reference. */

@@ -4,13 +4,18 @@
 //! metric finite and non-negative (`oos_rate` and `q_mean` at most 1), no alarm on a
 //! partial window; the fixed-size `Monitor` and the slice functions agree bit for bit.
 //!
+//! The same bytes are tried as a conformal section (DESIGN §8): when they read, every
+//! detection's set holds exactly the classes whose score reaches its threshold, its
+//! size is the mask's popcount, and the section's stored -inf thresholds are exactly
+//! those of rank 0.
+//!
 //! Input: a `u16` section length `n`, `n` section bytes (tried as given and with a valid
 //! trailer), then detections of three `f32` logits and one objectness byte.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
 use mlmap::host::monitor::DynMonitor;
-use mlmap::{Monitor, MonitorSpec, Table};
+use mlmap::{threshold_rank, ConformalSpec, Monitor, MonitorSpec, Table};
 
 type Shipped = Table<3, 22, 17, 22, 4>;
 const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
@@ -32,8 +37,41 @@ fuzz_target!(|data: &[u8]| {
             assert!(Shipped::from_bytes(&file).is_ok());
             run(&spec, detections);
         }
+        if let Ok(spec) = ConformalSpec::from_bytes(&file, &table.view()) {
+            assert!(Shipped::from_bytes(&file).is_ok());
+            sets(&spec, &table, detections);
+        }
     }
 });
+
+fn sets(spec: &ConformalSpec<'_>, table: &Shipped, detections: &[u8]) {
+    for c in 0..3 {
+        let (Some(n), Some(t)) = (spec.calibration_rows(c), spec.threshold(c)) else {
+            panic!("class {c} has a threshold");
+        };
+        assert_eq!(threshold_rank(n, spec.alpha()) == 0, t == f32::NEG_INFINITY);
+    }
+    let view = table.view();
+    for d in detections.chunks_exact(13) {
+        let x = [0, 1, 2].map(|i| {
+            let b: [u8; 4] = d[4 * i..4 * i + 4].try_into().unwrap_or_default();
+            f32::from_le_bytes(b)
+        });
+        let os = f32::from(d[12]) / 255.0;
+        let (mut s, mut scratch, mut mask) = ([0.0f32; 3], [0.0f32; 4], [0u32; 1]);
+        match spec.score_set(&view, &x, os, &mut s, &mut scratch, &mut mask) {
+            Ok(size) => {
+                assert_eq!(size, mask[0].count_ones());
+                for c in 0..3 {
+                    let t = spec.threshold(c).unwrap_or(f32::INFINITY);
+                    assert_eq!(mask[0] >> c & 1 == 1, s[c] >= t);
+                }
+                assert_eq!(mask[0] >> 3, 0);
+            }
+            Err(_) => assert!(x.iter().any(|v| v.is_nan())),
+        }
+    }
+}
 
 fn run(spec: &MonitorSpec<'_>, detections: &[u8]) {
     let Ok(mut fixed) = Monitor::<'_, 3, 22, 4>::new(spec) else {

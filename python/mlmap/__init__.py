@@ -32,6 +32,10 @@ The drift monitor (docs/DESIGN.md section 7): ``monitor_fit`` chooses alarm thre
 in-distribution rows and returns the table file with its monitor section;
 ``Monitor.from_bytes(data)`` replays detections in order, one dict per window.
 
+Conformal class sets (docs/DESIGN.md section 8): ``conformal_fit`` fits per-class
+thresholds on labelled calibration rows and returns the table file with its conformal
+section; ``Table.conformal_sets(logits, objectness)`` gives the ``(N, K)`` boolean sets.
+
 Fitting across processes or machines (docs/SCALE.md): ``FitStats`` (pass a) of every
 shard, merged (``+``, ``sum``); its ``edges(...)``; ``FitCounts`` (pass b) of every shard
 over those edges, merged; ``finish(stats, counts)``: the bytes ``fit`` gives on all rows.
@@ -49,6 +53,7 @@ from ._mlmap import (
     evaluate,
     finish,
     fit,
+    conformal_fit,
     monitor_fit,
     tune,
 )
@@ -67,6 +72,7 @@ __all__ = [
     "finish",
     "fit",
     "monitor_fit",
+    "conformal_fit",
     "tune",
 ]
 

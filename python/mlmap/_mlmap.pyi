@@ -101,6 +101,14 @@ class Table:
     def quantized(self) -> Optional[Dict[str, Any]]:
         """The quantized section the table was read with: `None`, or `{"bits": 8 or 16,
         "size": bytes, "heads": ("ml", "map"[, "bayes"])}`."""
+    @property
+    def conformal(self) -> Optional[Dict[str, Any]]:
+        """The conformal section (docs/DESIGN.md section 8): `None`, or `{"head", "alpha",
+        "thresholds", "calibration_rows"}`."""
+    def conformal_sets(
+        self, logits: Logits, objectness: Objectness = None
+    ) -> npt.NDArray[np.bool_]:
+        """The `(N, K)` conformal sets: `True` where the class is in the row's set."""
     def histogram(
         self, head: Literal["ml", "map"], cls: Union[int, str]
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
@@ -343,4 +351,14 @@ def monitor_fit(
     false_alarm: float,
     windows: int = 2000,
     seed: int = 0,
+) -> bytes: ...
+
+def conformal_fit(
+    table: Table,
+    logits: Logits,
+    labels: Labels,
+    objectness: Objectness = None,
+    *,
+    alpha: float,
+    head: Literal["ml", "map", "bayes", "open"] = "map",
 ) -> bytes: ...

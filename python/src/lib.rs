@@ -13,6 +13,7 @@
 )]
 
 mod arrays;
+mod conformal;
 mod errors;
 mod evaluate;
 mod fit;
@@ -92,6 +93,7 @@ fn _mlmap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<table::PyTable>()?;
     m.add_class::<monitor::PyMonitor>()?;
     m.add_function(wrap_pyfunction!(monitor::monitor_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(conformal::conformal_fit, m)?)?;
     m.add("TableError", m.py().get_type::<errors::TableError>())?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(decide, m)?)?;

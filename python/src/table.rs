@@ -33,7 +33,8 @@ use crate::score::{self, RowError};
 pub struct PyTable {
     pub(crate) table: DynTable,
     /// The file's bytes: the canonical encoding (DESIGN §6.10; equal tables have equal
-    /// bytes), then the quantized section the table was read with, if any.
+    /// bytes), then the quantized section the table was read with, if any; a file with a
+    /// conformal section is kept whole.
     pub(crate) bytes: Vec<u8>,
     /// The quantized section's code width, length in bytes, and whether it holds the
     /// Bayes head.
@@ -66,6 +67,13 @@ impl PyTable {
             }
             Err(QTableError::NotQuantized) => {}
             Err(e) => return Err(error(format!("quantized section: {e}"))),
+        }
+        // A conformal section (DESIGN §8) is checked and kept, with the file's other
+        // sections.
+        if mlmap::section_of(bytes, mlmap::CONFORMAL_MAGIC).is_some() {
+            mlmap::ConformalSpec::from_bytes(bytes, &t.table.view())
+                .map_err(|e| error(format!("conformal section: {e}")))?;
+            t.bytes = bytes.to_vec();
         }
         Ok(t)
     }

@@ -13,6 +13,7 @@ pub use self::error::HostError;
 pub use mlmap_core::{BayesSpec, DynQTable, DynTable};
 
 pub mod baselines;
+pub mod conformal;
 pub mod data;
 pub mod dataset;
 mod error;

@@ -78,6 +78,10 @@ mod streams;
 /// `monitor fit` and `monitor`: the numpy reference's thresholds and windows, refusals.
 mod monitor;
 
+/// `conformal`, and the sets in `inspect`, `apply` and `eval`: numpy's thresholds and
+/// sets, the coverage report, refusals.
+mod conformal;
+
 /// Messages that say what is true, and limits that refuse before the work.
 mod messages;
 

@@ -12,7 +12,7 @@ use mlmap::{EdgeMode, UpperTail};
 
 /// The parser of a flag taking one of the values of a [`Named`] set: the possible
 /// values, their descriptions and the parsing all come from the set's table.
-fn named<T: Named + Clone + Send + Sync>() -> impl TypedValueParser<Value = T> {
+pub(crate) fn named<T: Named + Clone + Send + Sync>() -> impl TypedValueParser<Value = T> {
     let values = T::NAMES
         .iter()
         .map(|n| PossibleValue::new(n.flag).help(n.help));
@@ -53,6 +53,8 @@ pub enum Command {
     Quantize(crate::cmd::quantize::QuantizeArgs),
     /// Replay a log through the drift monitor; `monitor fit` writes its alarm thresholds.
     Monitor(crate::cmd::monitor::MonitorArgs),
+    /// Fit the thresholds of conformal class sets on labelled rows and write them into a table.
+    Conformal(crate::cmd::conformal::ConformalArgs),
 }
 
 /// The fit settings of `fit` and of `stats` (pass a).

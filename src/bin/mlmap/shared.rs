@@ -85,3 +85,17 @@ pub fn write_fit_file(path: &Path, file: &FitFile) -> Result<()> {
         bytes.len()
     ))
 }
+
+/// One class's threshold as `inspect` and `conformal` print it.
+pub fn threshold_line(name: &str, n: u32, t: f32, alpha: f32) -> String {
+    let r = mlmap::threshold_rank(n, alpha);
+    if r == 0 {
+        format!(
+            "  {name}: -inf (every set holds it: {n} calibration rows, floor((n + 1) alpha) = 0; \
+             at least {} rows give a threshold)",
+            ((1.0 / f64::from(alpha)).ceil() as u64).saturating_sub(1)
+        )
+    } else {
+        format!("  {name}: {t} (rank {r} of {n} calibration rows)")
+    }
+}

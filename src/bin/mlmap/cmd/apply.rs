@@ -4,12 +4,13 @@
 
 use std::fmt::Write as _;
 
+use mlmap::host::conformal::has_conformal;
 use mlmap::host::data::{self, at, check_classes};
 use mlmap::host::dataset::Label;
 use mlmap::host::metrics::decision;
 use mlmap::host::names::Named as _;
 use mlmap::host::DynQTable;
-use mlmap::{code_range, dequantize, Head};
+use mlmap::{code_range, dequantize, set_words, ConformalSpec, Head};
 
 use crate::args::ApplyArgs;
 use crate::error::{CliError, Result};
@@ -50,6 +51,28 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
         }
     }
     let view = table.view();
+    // Conformal sets (DESIGN §8) when the table file holds the section: their head's
+    // scores, as computed above, thresholded by the layer's spec.
+    let conformal = if has_conformal(&bytes) {
+        let spec = ConformalSpec::from_bytes(&bytes, &view)
+            .map_err(|e| CliError::input(&args.table, e))?;
+        let at = heads
+            .iter()
+            .position(|&h| h == spec.head())
+            .ok_or_else(|| {
+                CliError::input(
+                    &args.table,
+                    format!(
+                    "its conformal sets threshold the {} head, which its quantized section lacks",
+                    spec.head()
+                ),
+                )
+            })?;
+        Some((spec, at))
+    } else {
+        None
+    };
+    let mut mask = vec![0u32; set_words(k)];
     let mut codes = vec![0i32; k];
     let out_path = &args.output;
     let csv_err = |e: csv::Error| CliError::internal(out_path, format!("cannot write: {e}"));
@@ -68,6 +91,9 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
         }
         for &head in &heads {
             header.push(format!("{}_pred", head.name()));
+        }
+        if conformal.is_some() {
+            header.extend(names.iter().map(|n| format!("set_{n}")));
         }
         csv.write_record(&header).map_err(csv_err)?;
         let mut x = vec![0.0f32; k];
@@ -136,6 +162,17 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
             for head_scores in scores.chunks_exact(k) {
                 let pred = names.get(decision(head_scores, &x)).copied().unwrap_or("");
                 csv.write_field(pred).map_err(csv_err)?;
+            }
+            if let Some((spec, at_head)) = &conformal {
+                let s = scores
+                    .get(at_head * k..(at_head + 1) * k)
+                    .unwrap_or_default();
+                spec.set_of(s, &mut mask).map_err(at)?;
+                for c in 0..k {
+                    let inside = mask.get(c / 32).is_some_and(|w| w >> (c % 32) & 1 == 1);
+                    csv.write_field(if inside { "1" } else { "0" })
+                        .map_err(csv_err)?;
+                }
             }
             csv.write_record(None::<&[u8]>).map_err(csv_err)?;
             Ok(())

@@ -430,6 +430,7 @@ fn render_json(
     bytes: &[u8],
     quantized: Option<&DynQTable<'_>>,
     monitor: serde_json::Value,
+    conformal: serde_json::Value,
 ) -> String {
     let st = t.settings();
     let names: Vec<&str> = t.class_names().collect();
@@ -481,6 +482,7 @@ fn render_json(
             .collect::<serde_json::Map<String, serde_json::Value>>(),
         "quantized": quantized.map(|q| quantized_json(q, &names)),
         "monitor": monitor,
+        "conformal": conformal,
     });
     let mut s = serde_json::to_string_pretty(&v).unwrap_or_default();
     s.push('\n');
@@ -529,12 +531,70 @@ fn monitor_info(file: &[u8], table: &DynTable) -> (Option<String>, serde_json::V
     }
 }
 
+/// The conformal section (DESIGN §8): its head, alpha and thresholds as text and JSON
+/// (`null` without one). A class whose rank `floor((n_c + 1) alpha)` is 0 has no
+/// threshold (`-inf`, JSON `null`): every set holds it.
+fn conformal_info(file: &[u8], table: &DynTable) -> (Option<String>, serde_json::Value) {
+    let Some(section) = mlmap::section_of(file, mlmap::CONFORMAL_MAGIC) else {
+        return (None, serde_json::Value::Null);
+    };
+    match mlmap::ConformalSpec::from_bytes(file, &table.view()) {
+        Ok(spec) => {
+            let mut text = format!(
+                "conformal  section {} bytes (CRC-32 verified): sets of the {} head at alpha {} \
+                 (class c in the set when its score >= t_c)\n",
+                section.len(),
+                spec.head().name(),
+                spec.alpha()
+            );
+            let mut classes = Vec::new();
+            for (c, name) in table.class_names().enumerate() {
+                let (n, t) = (
+                    spec.calibration_rows(c).unwrap_or(0),
+                    spec.threshold(c).unwrap_or(f32::NEG_INFINITY),
+                );
+                let _ = writeln!(
+                    text,
+                    "{}",
+                    crate::shared::threshold_line(&visible(name), n, t, spec.alpha())
+                );
+                let rank = mlmap::threshold_rank(n, spec.alpha());
+                classes.push(serde_json::json!({
+                    "name": name,
+                    "calibration_rows": n,
+                    "rank": rank,
+                    "threshold": if rank == 0 { serde_json::Value::Null } else { serde_json::json!(t) },
+                }));
+            }
+            let json = serde_json::json!({
+                "bytes": section.len(),
+                "head": spec.head().name(),
+                "alpha": spec.alpha(),
+                "classes": classes,
+            });
+            (Some(text), json)
+        }
+        Err(e) => (
+            Some(format!("conformal  section refused: {e}\n")),
+            serde_json::json!({ "error": e.to_string() }),
+        ),
+    }
+}
+
 pub fn run(args: &InspectArgs) -> Result<()> {
     let (table, file) = read_table(&args.table)?;
     let (bytes, quantized) = split(&file);
     let (monitor_text, monitor_json) = monitor_info(&file, &table);
+    let (conformal_text, conformal_json) = conformal_info(&file, &table);
     let text = match args.format {
-        Format::Json => render_json(&args.table, &table, bytes, quantized.as_ref(), monitor_json),
+        Format::Json => render_json(
+            &args.table,
+            &table,
+            bytes,
+            quantized.as_ref(),
+            monitor_json,
+            conformal_json,
+        ),
         Format::Text | Format::Markdown => {
             let mut s = render_text(&args.table, &table, bytes, args.bins);
             if let Some(q) = &quantized {
@@ -544,6 +604,9 @@ pub fn run(args: &InspectArgs) -> Result<()> {
             }
             if let Some(m) = monitor_text {
                 s.push_str(&m);
+            }
+            if let Some(c) = conformal_text {
+                s.push_str(&c);
             }
             s
         }

@@ -3,6 +3,7 @@
 //! another command.
 
 pub mod apply;
+pub mod conformal;
 pub mod demo;
 pub mod eval;
 pub mod export_c;
@@ -31,5 +32,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::ExportC(a) => export_c::run(a),
         Command::Quantize(a) => quantize::run(a),
         Command::Monitor(a) => monitor::run(a),
+        Command::Conformal(a) => conformal::run(a),
     }
 }
