@@ -3,8 +3,9 @@
 # `-machine mps2-an386`), with the table decoded from a calibration sector and the one
 # embedded at build time, and every score matches the host's float64 values
 # (`tools/firmware_expected.py`). Also shows the run can fail: a canary build with one
-# perturbed expected ML score, one perturbed open-head score and one perturbed score after
-# a recalibration map must exit non-zero and report all three. Installs qemu-system-arm if
+# perturbed expected ML score, one perturbed open-head score, one perturbed score after
+# a recalibration map, one perturbed window PSI of the drift monitor's replay and one
+# flipped conformal set must exit non-zero and report all five. Installs qemu-system-arm if
 # missing; without a Cortex-M4F toolchain the proof fails (MLMAP_ALLOW_SKIP=1 skips it outside CI).
 # Run from the repository root.
 set -euo pipefail
@@ -72,6 +73,10 @@ grep -qE '^FAIL .*: [a-z ]+ open: got' "$work/canary.log" ||
     fail "the canary firmware did not fail on its perturbed open-head score"
 grep -qE '^FAIL .*: small table with maps open: got' "$work/canary.log" ||
     fail "the canary firmware did not fail on its perturbed score after a map"
+grep -qE '^FAIL monitor window: .* monitor: got' "$work/canary.log" ||
+    fail "the canary firmware did not fail on its perturbed monitor window"
+grep -qE '^FAIL .*: .* set: got mask' "$work/canary.log" ||
+    fail "the canary firmware did not fail on its flipped conformal set"
 echo "ok: the canary firmware failed as it must (exit status $status)"
 
 section "build: cargo build --release --target $THUMB_TARGET (via $THUMB_VIA)"

@@ -29,6 +29,20 @@ It also writes the quantized cases: int8 codes for the section of
 bytes, by docs/FORMAT.md), each with its dequantized logits `float32(q - zp) * scale` in
 float32 and the float64 scores of those logits, as above.
 
+The drift monitor (docs/DESIGN.md §7) is checked by a replay on the monitor section of
+`tests/golden/monitor_small.mlmap` (W = 50): a short stream of rows of examples/data/test.csv
+and ood.csv (an in-distribution window, an out-of-distribution one, a mixed one and a
+partial last window) whose window metrics (per-logit PSI, psi_max, oos_rate, q_mean) come
+from the numpy reference `tools/monitor_ref.py`, and whose alarms are those metrics against
+the thresholds read here from the section's bytes. A metric closer to its threshold than
+the firmware's tolerance is refused here, so the expected alarms cannot depend on rounding.
+
+The conformal class sets (docs/DESIGN.md §8) are checked on the section of
+`tests/golden/conformal_small.mlmap` (the open head at alpha 0.1): the thresholds read here
+from the section's bytes must be those of `tests/golden/conformal/sets_open_0.1.csv`
+(written by `tools/conformal_ref.py`), whose sets of the first test rows the firmware must
+give bit for bit wherever no score lies within 1e-5 of its threshold.
+
     python3 tools/firmware_expected.py [TABLE] [OUT]     # defaults: tables/default.mlmap,
                                                          #           firmware/src/expected.rs
     python3 tools/firmware_expected.py --check           # exit 1 if OUT is out of date
@@ -53,6 +67,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import mlmap_ref  # noqa: E402  (encode and the float32 edge rule only)
+import monitor_ref  # noqa: E402  (the drift monitor's windows)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_TABLE = os.path.join(ROOT, "tables", "default.mlmap")
@@ -62,6 +77,10 @@ QUANTIZED = os.path.join(ROOT, "tables", "default_q8.mlmap")
 SMALL_OPEN = os.path.join(ROOT, "tests", "golden", "layer", "small_open.mlmap")
 SMALL_MAPS = os.path.join(ROOT, "tests", "golden", "layer", "small_maps.mlmap")
 MAPS_CSV = os.path.join(ROOT, "tests", "golden", "layer", "maps.csv")
+MONITOR_FILE = os.path.join(ROOT, "tests", "golden", "monitor_small.mlmap")
+CONFORMAL_FILE = os.path.join(ROOT, "tests", "golden", "conformal_small.mlmap")
+SETS_CSV = os.path.join(ROOT, "tests", "golden", "conformal", "sets_open_0.1.csv")
+OOD_CSV = os.path.join(ROOT, "examples", "data", "ood.csv")
 
 # Rows of examples/data/test.csv scored besides the synthetic cases.
 CSV_ROWS = 16
@@ -494,6 +513,104 @@ def map_cases(k):
         raise ValueError(f"{MAPS_CSV}: only {len(out)} rows for small_maps")
     return out
 
+# The monitor replay: (source, first row, rows) blocks of the stream, in order.
+MONITOR_STREAM = (("test", 0, 50), ("ood", 0, 50), ("test", 50, 40), ("ood", 50, 10),
+                  ("test", 90, 20))
+# A metric closer than this (relative to 1 + |threshold|) to its threshold is refused.
+MONITOR_MARGIN = 1e-4
+# Below this gap between the two largest per-logit PSI, psi_logit is not checked.
+PSI_LOGIT_MARGIN = 1e-4
+
+
+def monitor_replay(table_crc):
+    """(rows, windows, thresholds, window size): the stream's rows as (float32 logits,
+    objectness) and each window's expected metrics and alarms."""
+    with open(MONITOR_FILE, "rb") as fh:
+        data = fh.read()
+    table_bytes, sections = monitor_ref.split_sections(data)
+    if struct.unpack("<I", table_bytes[-4:])[0] != table_crc:
+        raise ValueError(f"{MONITOR_FILE}: not a section of the shipped table")
+    t = mlmap_ref.decode(table_bytes)
+    sec = monitor_ref.read_monitor_section(sections[b"MLMW"])
+    if sec["table_crc"] != table_crc or not sec["has_q"]:
+        raise ValueError(f"{MONITOR_FILE}: the section does not name the shipped table")
+    ref = monitor_ref.reference(t)
+    # The stored shares are the float32 of the reference's.
+    assert np.abs(ref - sec["reference"]).max() < 1e-7
+    w = sec["window"]
+    data_ = {}
+    for name, path in (("test", TEST_CSV), ("ood", OOD_CSV)):
+        _, _, x, os_ = monitor_ref.logits_f32(path)
+        data_[name] = (x, os_.astype(np.float32))
+    xs, oss = [], []
+    for name, start, n in MONITOR_STREAM:
+        x, os_ = data_[name]
+        xs.append(x[start:start + n])
+        oss.append(os_[start:start + n])
+    x, os_ = np.concatenate(xs), np.concatenate(oss)
+    bins_ = monitor_ref.row_bins(t, x)
+    outside = monitor_ref.row_outside(bins_, ref)
+    q = monitor_ref.row_q(t, x)
+    th = (float(sec["psi"]), float(sec["oos"]), float(sec["q"]))
+    if MONITOR_MARGIN < 10 * firmware_tolerance(name="MONITOR_TOLERANCE"):
+        raise ValueError("MONITOR_MARGIN must be well above the firmware's MONITOR_TOLERANCE")
+    windows = []
+    for i, start in enumerate(range(0, len(x), w)):
+        idx = np.arange(start, min(start + w, len(x)))
+        m = monitor_ref.window_metrics(bins_, outside, q, ref, idx)
+        full = len(idx) == w
+        for v, tv in ((m["psi_max"], th[0]), (m["oos_rate"], th[1]), (m["q_mean"], th[2])):
+            if abs(v - tv) <= MONITOR_MARGIN * (1.0 + abs(tv)):
+                raise ValueError(f"window {i}: a metric {v} is too close to its threshold {tv}")
+        alarms = (full and m["psi_max"] > th[0], full and m["oos_rate"] > th[1],
+                  full and m["q_mean"] < th[2])
+        top = sorted(m["psi"], reverse=True)
+        logit = m["psi_logit"] if top[0] - top[1] > PSI_LOGIT_MARGIN else None
+        windows.append(dict(window=i, rows=len(idx), psi=[float(v) for v in m["psi"]],
+                            psi_max=m["psi_max"], psi_logit=logit, oos_rate=m["oos_rate"],
+                            q_mean=m["q_mean"], alarms=alarms))
+    if not any(any(v["alarms"]) for v in windows) or all(
+            any(v["alarms"]) for v in windows if v["rows"] == w):
+        raise ValueError("the replay needs a window with an alarm and a full one without")
+    if windows[-1]["rows"] == w:
+        raise ValueError("the replay must end with a partial window")
+    rows = [([np.float32(v) for v in r], np.float32(o)) for r, o in zip(x, os_)]
+    return rows, windows, th, w
+
+
+def conformal_cases(table_crc, k):
+    """(alpha, thresholds, cases): the section's alpha and thresholds (read from its
+    bytes, and checked against the CSV's), and per row of sets_open_0.1.csv the test row's
+    logits, objectness, the expected mask and whether it is compared."""
+    with open(CONFORMAL_FILE, "rb") as fh:
+        data = fh.read()
+    table_bytes, sections = monitor_ref.split_sections(data)
+    if struct.unpack("<I", table_bytes[-4:])[0] != table_crc:
+        raise ValueError(f"{CONFORMAL_FILE}: not a section of the shipped table")
+    sec = sections[b"MLMS"]
+    magic, version, head, _r, k_, _r2, crc, alpha = struct.unpack_from("<4sBBHHHIf", sec, 0)
+    if (magic, version, head, k_, crc) != (b"MLMS", 1, 3, k, table_crc):
+        raise ValueError(f"{CONFORMAL_FILE}: not an open-head section of the shipped table")
+    stored = [struct.unpack_from("<If", sec, 20 + 8 * c) for c in range(k)]
+    with open(SETS_CSV, newline="") as fh:
+        rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    with open(TEST_CSV, newline="") as fh:
+        test = list(csv.DictReader(fh))
+    names = [f[2:] for f in rows[0] if f.startswith("t_")]
+    thresholds = [float(rows[0][f"t_{n}"]) for n in names]
+    for (_, t32), t64 in zip(stored, thresholds):
+        assert abs(float(t32) - t64) <= 1e-7, (t32, t64)
+    out = []
+    for r in rows:
+        i = int(r["row"])
+        d = test[i]
+        logits = [np.float32(d[n]) for n in names]
+        out.append((f"test.csv id {d['id']}", logits, np.float32(d["objectness"]),
+                    int(r["mask"]), float(r["margin"]) > 1e-5))
+    if sum(c[4] for c in out) < 10:
+        raise ValueError(f"{SETS_CSV}: fewer than 10 rows away from the thresholds")
+    return np.float32(alpha), thresholds, out
+
 
 def lit(v):
     """A Rust f32 expression for float32 `v`, exact."""
@@ -565,7 +682,7 @@ def render(table, source, small, small_source):
         f"//! `python3 tools/firmware_expected.py` from `{source}` and `{small_source}`.",
         "//! Generated: do not edit; `.ci/firmware.sh` checks that it is up to date.",
         "",
-        "use crate::case::{Case, ErrorCase, Expect, MapCase, OpenExpect, QCase};",
+        "use crate::case::{Case, ErrorCase, Expect, MapCase, OpenExpect, QCase, SetCase, WindowCase};",
         "use mlmap::InferError;",
         "",
         "/// Number of classes of the table.",
@@ -657,6 +774,62 @@ def render(table, source, small, small_source):
         ]
         lines += [f"            [{', '.join(lit64(v) for v in h)}]," for h in scores]
         lines += ["        ],", f"        error: {err},", "    },"]
+    rows, windows, th, w = monitor_replay(table["crc"])
+    lines += [
+        "];",
+        "",
+        f"/// The window of the monitor section of `{os.path.relpath(MONITOR_FILE, ROOT)}`.",
+        f"pub const MONITOR_WINDOW: u32 = {w};",
+        "/// Its thresholds of psi_max, oos_rate and q_mean, as stored.",
+        f"pub const MONITOR_THRESHOLDS: (f32, f32, f32) = ({lit(th[0])}, {lit(th[1])}, {lit(th[2])});",
+        "",
+        "/// The replayed stream, in order: (logits, objectness) of rows of test.csv and ood.csv",
+        f"/// ({', '.join(f'{name} {a}..{a + n}' for name, a, n in MONITOR_STREAM)}).",
+        "pub static MONITOR_ROWS: &[([f32; K], f32)] = &[",
+    ]
+    lines += [f"    ([{', '.join(lit(v) for v in x)}], {lit(o)})," for x, o in rows]
+    lines += [
+        "];",
+        "",
+        "/// Each window's metrics (numpy reference, float64) and alarms; the last is partial.",
+        "pub static MONITOR_WINDOWS: &[WindowCase<K>] = &[",
+    ]
+    for m in windows:
+        lines += [
+            "    WindowCase {",
+            f"        window: {m['window']},",
+            f"        rows: {m['rows']},",
+            f"        psi: [{', '.join(lit64(v) for v in m['psi'])}],",
+            f"        psi_max: {lit64(m['psi_max'])},",
+            f"        psi_logit: {rust_opt(m['psi_logit'])},",
+            f"        oos_rate: {lit64(m['oos_rate'])},",
+            f"        q_mean: {lit64(m['q_mean'])},",
+            f"        alarms: ({', '.join(str(bool(a)).lower() for a in m['alarms'])}),",
+            "    },",
+        ]
+    alpha, thresholds, sets = conformal_cases(table["crc"], k)
+    lines += [
+        "];",
+        "",
+        f"/// The alpha of the conformal section of `{os.path.relpath(CONFORMAL_FILE, ROOT)}` (open",
+        "/// head).",
+        f"pub const CONFORMAL_ALPHA: f32 = {lit(alpha)};",
+        "/// Its thresholds, from the numpy reference.",
+        f"pub const CONFORMAL_THRESHOLDS: [f64; K] = [{', '.join(lit64(v) for v in thresholds)}];",
+        "",
+        f"/// Detections and their sets (`{os.path.relpath(SETS_CSV, ROOT)}`).",
+        "pub static SET_CASES: &[SetCase<K>] = &[",
+    ]
+    for label, logits, os_, mask, compared in sets:
+        lines += [
+            "    SetCase {",
+            f"        label: {json.dumps(label)},",
+            f"        logits: [{', '.join(lit(x) for x in logits)}],",
+            f"        objectness: {lit(os_)},",
+            f"        mask: {mask},",
+            f"        compared: {str(compared).lower()},",
+            "    },",
+        ]
     lines += ["];", ""]
     return "\n".join(lines)
 
@@ -669,12 +842,13 @@ FIRMWARE_MAIN = os.path.join(ROOT, "firmware", "src", "main.rs")
 FLOAT = re.compile(r"-?(?:\d+\.\d*(?:[eE][-+]?\d+)?|\d+[eE][-+]?\d+)")
 
 
-def firmware_tolerance(path=FIRMWARE_MAIN):
-    """The firmware's bound on |score - expected| (`const TOLERANCE: f64 = ...;`)."""
+def firmware_tolerance(path=FIRMWARE_MAIN, name="TOLERANCE"):
+    """The firmware's bound on |score - expected| (`const TOLERANCE: f64 = ...;`), or
+    another of its `f64` constants."""
     with open(path) as fh:
-        found = re.findall(r"const TOLERANCE: f64 = ([0-9.eE+-]+);", fh.read())
+        found = re.findall(rf"const {name}: f64 = ([0-9.eE+-]+);", fh.read())
     if len(found) != 1:
-        raise ValueError(f"{path}: expected one `const TOLERANCE: f64`, found {len(found)}")
+        raise ValueError(f"{path}: expected one `const {name}: f64`, found {len(found)}")
     return float(found[0])
 
 

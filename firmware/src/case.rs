@@ -76,3 +76,39 @@ pub struct MapCase<const K: usize> {
     /// The error every head must return instead.
     pub error: Option<InferError>,
 }
+
+/// What one window of the drift monitor's replay (DESIGN §7) must report, from the numpy
+/// reference (`tools/monitor_ref.py`).
+pub struct WindowCase<const K: usize> {
+    /// Index of the window, from 0.
+    pub window: u32,
+    /// Detections in the window (fewer than W for the last, partial one).
+    pub rows: u32,
+    /// The PSI of each logit.
+    pub psi: [f64; K],
+    /// Their maximum.
+    pub psi_max: f64,
+    /// The logit of the maximum, unless two PSI are too close to call.
+    pub psi_logit: Option<u16>,
+    /// Share of the detections with a logit out of support.
+    pub oos_rate: f64,
+    /// Mean known-probability of the open head.
+    pub q_mean: f64,
+    /// The alarms of psi_max, oos_rate and q_mean.
+    pub alarms: (bool, bool, bool),
+}
+
+/// A detection and its conformal class set (DESIGN §8) from the numpy reference
+/// (`tools/conformal_ref.py`).
+pub struct SetCase<const K: usize> {
+    /// What the case is.
+    pub label: &'static str,
+    /// Class logits.
+    pub logits: [f32; K],
+    /// Objectness.
+    pub objectness: f32,
+    /// The set: class `c` in bit `c`.
+    pub mask: u64,
+    /// Whether the set is compared: no score lies within 1e-5 of its threshold.
+    pub compared: bool,
+}

@@ -29,6 +29,14 @@
 //! (`tests/golden/layer/maps.csv`); the decision and the order of the classes must be
 //! those of the small table without maps.
 //!
+//! The runtime-safety sections after the table: the drift monitor of DESIGN §7 replays a
+//! stream of detections on the monitor section of `monitor_small.mlmap` (W = 50), each
+//! window's PSI, out-of-support rate and mean `q` within [`MONITOR_TOLERANCE`] of the numpy
+//! reference's and its alarms those of the reference's metrics against the stored
+//! thresholds (one in-distribution window without an alarm, an out-of-distribution and a
+//! mixed one with, a partial last one); and the conformal class sets of DESIGN §8 on the
+//! section of `conformal_small.mlmap` must be the reference's sets, bit for bit.
+//!
 //! It prints `N passed, M failed` over semihosting and exits with a non-zero status if
 //! anything failed.
 #![no_std]
@@ -46,19 +54,37 @@ use cortex_m_semihosting::{debug, hprintln};
 use mlmap::embedded::quantized::{EmbeddedQTable, QUANTIZED, QUANTIZED_SECTION};
 use mlmap::embedded::{EmbeddedTable, TABLE};
 use mlmap::{
-    dequantize, DecodeError, FastMath, InferError, Libm, QTableError, Scores, Table,
+    dequantize, ConformalError, ConformalSpec, DecodeError, FastMath, Head, InferError, Libm,
+    Monitor, MonitorError, MonitorSpec, QTableError, Scores, Table, WindowReport,
     FAST_MATH_MAX_SCORE_ERROR,
 };
 
-use case::{Case, Expect, OpenExpect};
+use case::{Case, Expect, OpenExpect, WindowCase};
 use expected::{
-    CASES, CLASS_NAMES, ERROR_CASES, K, MAPS_TABLE_CRC, MAP_CASES, OPEN_PARAMS, QCASES, Q_SCALES,
-    Q_ZERO_POINTS, SMALL_CASES, SMALL_OPEN_PARAMS, SMALL_SHAPE, SMALL_TABLE_CRC, TABLE_CRC,
+    CASES, CLASS_NAMES, CONFORMAL_ALPHA, CONFORMAL_THRESHOLDS, ERROR_CASES, K, MAPS_TABLE_CRC,
+    MAP_CASES, MONITOR_ROWS, MONITOR_THRESHOLDS, MONITOR_WINDOW, MONITOR_WINDOWS, OPEN_PARAMS,
+    QCASES, Q_SCALES, Q_ZERO_POINTS, SET_CASES, SMALL_CASES, SMALL_OPEN_PARAMS, SMALL_SHAPE,
+    SMALL_TABLE_CRC, TABLE_CRC,
 };
 
 /// Largest accepted difference between a score computed on the device (`f32`, libm) and
 /// the host's float64 value.
 const TOLERANCE: f64 = 1e-6;
+
+/// Largest accepted difference of a window metric (PSI, out-of-support rate, mean `q`)
+/// from the host's float64 value, relative to `1 + |value|`. `tools/firmware_expected.py`
+/// refuses a window whose metric lies within ten times this of its threshold.
+const MONITOR_TOLERANCE: f64 = 1e-5;
+
+/// The shipped table with a monitor section (DESIGN §7) appended.
+static MONITOR_FILE: &[u8] = include_bytes!("../../tests/golden/monitor_small.mlmap");
+
+/// The shipped table with a conformal section (DESIGN §8, the open head at alpha 0.1).
+static CONFORMAL_FILE: &[u8] = include_bytes!("../../tests/golden/conformal_small.mlmap");
+
+/// The monitor of the shipped table's shape.
+type EmbeddedMonitor<'s> =
+    Monitor<'s, K, { mlmap::embedded::BINS_BAYES }, { mlmap::embedded::CATEGORIES }>;
 
 /// The table file, as written by `mlmap fit`.
 const TABLE_FILE: &[u8] = include_bytes!("../../tables/default.mlmap");
@@ -709,6 +735,256 @@ fn check_temperature_identity(r: &mut Report) {
     }
 }
 
+/// One window report against the host's values.
+fn check_window(r: &mut Report, name: &str, got: &WindowReport<K>, want: &WindowCase<K>) -> f64 {
+    let s = &got.summary;
+    let close = |g: f32, w: f64| (f64::from(g) - w).abs() <= MONITOR_TOLERANCE * (1.0 + w.abs());
+    let mut max_err = 0.0f64;
+    #[allow(unused_mut)]
+    let mut want_psi_max = want.psi_max;
+    #[cfg(feature = "canary")]
+    if want.window == 1 {
+        want_psi_max += 1e-2;
+    }
+    for (&g, &w) in got.psi.iter().zip(want.psi.iter()) {
+        max_err = max_err.max((f64::from(g) - w).abs());
+    }
+    let q = s.q_mean.unwrap_or(f32::NAN);
+    let ok = s.window == want.window
+        && s.rows == want.rows
+        && got
+            .psi
+            .iter()
+            .zip(want.psi.iter())
+            .all(|(&g, &w)| close(g, w))
+        && close(s.psi_max, want_psi_max)
+        && want.psi_logit.is_none_or(|l| l == s.psi_logit)
+        && close(s.oos_rate, want.oos_rate)
+        && close(q, want.q_mean);
+    r.check(
+        ok,
+        "monitor window",
+        format_args!(
+            "{name} monitor: got window {} rows {} psi {:?} (max {} at {}) oos {} q {:?}, want \
+             window {} rows {} psi {:?} (max {want_psi_max}) oos {} q {}",
+            s.window,
+            s.rows,
+            got.psi,
+            s.psi_max,
+            s.psi_logit,
+            s.oos_rate,
+            s.q_mean,
+            want.window,
+            want.rows,
+            want.psi,
+            want.oos_rate,
+            want.q_mean
+        ),
+    );
+    let alarms = (s.alarms.psi, s.alarms.oos, s.alarms.q);
+    r.check(
+        alarms == want.alarms,
+        "monitor window",
+        format_args!(
+            "{name} monitor window {}: alarms {alarms:?}, want {:?}",
+            s.window, want.alarms
+        ),
+    );
+    max_err
+}
+
+/// The drift monitor (DESIGN §7) of `MONITOR_FILE` on `t`: the stored window and
+/// thresholds, a damaged section refused, and the replay of `MONITOR_ROWS` through `push`
+/// and `push_open` against the host's windows. Returns the largest PSI deviation.
+fn check_monitor(r: &mut Report, name: &str, t: &EmbeddedTable) -> f64 {
+    let view = t.view();
+    let bytes = black_box(MONITOR_FILE);
+    // A flipped bit in the section fails its CRC.
+    let mut copy = [0u8; MONITOR_FILE.len()];
+    copy.copy_from_slice(bytes);
+    if let Some(b) = copy.get_mut(MONITOR_FILE.len() - 20) {
+        *b ^= 1;
+    }
+    let damaged = MonitorSpec::from_bytes(black_box(&copy[..]), &view).err();
+    r.check(
+        damaged == Some(MonitorError::Corrupted),
+        "monitor section",
+        format_args!("{name}: a damaged section gave {damaged:?}"),
+    );
+    let spec = match MonitorSpec::from_bytes(bytes, &view) {
+        Ok(s) => s,
+        Err(e) => {
+            r.check(false, "monitor section", format_args!("{name}: {e:?}"));
+            return 0.0;
+        }
+    };
+    let p = spec.params();
+    let th = (p.thresholds.psi, p.thresholds.oos, p.thresholds.q);
+    let bits = |t: (f32, f32, f32)| (t.0.to_bits(), t.1.to_bits(), t.2.to_bits());
+    r.check(
+        p.window == MONITOR_WINDOW && bits(th) == bits(MONITOR_THRESHOLDS) && spec.has_q(),
+        "monitor section",
+        format_args!(
+            "{name}: window {} thresholds {th:?}, want {MONITOR_WINDOW} {MONITOR_THRESHOLDS:?}",
+            p.window
+        ),
+    );
+    let (mut plain, mut open) = match (EmbeddedMonitor::new(&spec), EmbeddedMonitor::new(&spec)) {
+        (Ok(a), Ok(b)) => (a, b),
+        (a, _) => {
+            r.check(false, "monitor", format_args!("{name}: {:?}", a.err()));
+            return 0.0;
+        }
+    };
+    // A rejected detection counts nothing.
+    let mut bad = [0.0f32; K];
+    bad[1] = f32::NAN;
+    let refused = plain.push(black_box(&bad), 1.0).err();
+    r.check(
+        refused == Some(InferError::NanLogit { class: 1 }) && plain.accumulators().rows == 0,
+        "monitor",
+        format_args!("{name}: a NaN logit gave {refused:?}"),
+    );
+    let mut windows = MONITOR_WINDOWS.iter();
+    let mut max_err = 0.0f64;
+    let mut seen = 0usize;
+    let mut scores_same = true;
+    let mut ended =
+        |r: &mut Report, a: Option<WindowReport<K>>, b: Option<WindowReport<K>>| match (a, b) {
+            (None, None) => {}
+            (Some(a), Some(b)) => {
+                seen += 1;
+                r.check(
+                    a.summary == b.summary && a.psi.map(f32::to_bits) == b.psi.map(f32::to_bits),
+                    "monitor",
+                    format_args!("{name}: push and push_open report other windows"),
+                );
+                match windows.next() {
+                    Some(want) => max_err = max_err.max(check_window(r, name, &a, want)),
+                    None => r.check(false, "monitor", format_args!("{name}: an extra window")),
+                }
+            }
+            _ => r.check(
+                false,
+                "monitor",
+                format_args!("{name}: push and push_open end windows apart"),
+            ),
+        };
+    for (x, os) in MONITOR_ROWS {
+        let (x, os) = (black_box(*x), black_box(*os));
+        let a = plain.push(&x, os);
+        let b = open.push_open(&x, os);
+        match (a, b) {
+            (Ok(a), Ok((scores, b))) => {
+                scores_same &= t.open(&x, os).is_ok_and(|s| s.0 == scores.0);
+                ended(r, a, b);
+            }
+            (a, b) => r.check(
+                false,
+                "monitor",
+                format_args!("{name}: push {:?}, push_open {:?}", a.err(), b.err()),
+            ),
+        }
+    }
+    ended(r, plain.flush(), open.flush());
+    r.check(
+        scores_same,
+        "monitor",
+        format_args!("{name}: push_open's scores are not the open head's"),
+    );
+    r.check(
+        seen == MONITOR_WINDOWS.len() && plain.flush().is_none(),
+        "monitor",
+        format_args!("{name}: {seen} windows, want {}", MONITOR_WINDOWS.len()),
+    );
+    max_err
+}
+
+/// The conformal class sets (DESIGN §8) of `CONFORMAL_FILE` on `t`: the stored alpha,
+/// head and thresholds, a damaged section refused, and the sets of `SET_CASES`.
+fn check_conformal(r: &mut Report, name: &str, t: &EmbeddedTable) {
+    let view = t.view();
+    let bytes = black_box(CONFORMAL_FILE);
+    let mut copy = [0u8; CONFORMAL_FILE.len()];
+    copy.copy_from_slice(bytes);
+    if let Some(b) = copy.get_mut(CONFORMAL_FILE.len() - 20) {
+        *b ^= 1;
+    }
+    let damaged = ConformalSpec::from_bytes(black_box(&copy[..]), &view).err();
+    r.check(
+        damaged == Some(ConformalError::Corrupted),
+        "conformal section",
+        format_args!("{name}: a damaged section gave {damaged:?}"),
+    );
+    let spec = match ConformalSpec::from_bytes(bytes, &view) {
+        Ok(s) => s,
+        Err(e) => {
+            r.check(false, "conformal section", format_args!("{name}: {e:?}"));
+            return;
+        }
+    };
+    let thresholds_ok = (0..K).all(|c| {
+        spec.threshold(c)
+            .is_some_and(|v| (f64::from(v) - CONFORMAL_THRESHOLDS[c]).abs() <= TOLERANCE)
+    });
+    r.check(
+        spec.alpha().to_bits() == CONFORMAL_ALPHA.to_bits()
+            && spec.head() == Head::Open
+            && thresholds_ok,
+        "conformal section",
+        format_args!(
+            "{name}: alpha {} head {:?} thresholds {:?}, want {CONFORMAL_ALPHA} open \
+             {CONFORMAL_THRESHOLDS:?}",
+            spec.alpha(),
+            spec.head(),
+            [spec.threshold(0), spec.threshold(1), spec.threshold(2)]
+        ),
+    );
+    let mut scratch = [0.0f32; mlmap::embedded::CATEGORIES];
+    let mut compared = 0;
+    for case in SET_CASES {
+        let (x, os) = (black_box(case.logits), black_box(case.objectness));
+        let mut scores = [0.0f32; K];
+        let got = spec.set64(&view, &x, os, &mut scores, &mut scratch);
+        #[allow(unused_mut)]
+        let mut want = case.mask;
+        #[cfg(feature = "canary")]
+        if case.label == SET_CASES[0].label {
+            want ^= 1;
+        }
+        let Ok(mask) = got else {
+            r.check(false, case.label, format_args!("{name} set: {got:?}"));
+            continue;
+        };
+        // The set is the classes whose open-head score reaches their threshold.
+        let own = t.open(&x, os).is_ok_and(|s| {
+            s.0 == scores
+                && (0..K).all(|c| {
+                    let inside = spec.threshold(c).is_some_and(|v| scores[c] >= v);
+                    ((mask >> c) & 1 == 1) == inside
+                })
+        });
+        let same = !case.compared || mask == want;
+        compared += usize::from(case.compared);
+        r.check(
+            own && same && mask < 1 << K,
+            case.label,
+            format_args!("{name} set: got mask {mask:#b} (scores {scores:?}), want {want:#b}"),
+        );
+    }
+    let mut bad = [1.0f32; K];
+    bad[2] = f32::NAN;
+    let mut scores = [0.0f32; K];
+    let refused = spec
+        .set64(&view, &bad, 1.0, &mut scores, &mut scratch)
+        .err();
+    r.check(
+        refused == Some(InferError::NanLogit { class: 2 }) && compared >= 10,
+        "conformal",
+        format_args!("{name}: a NaN logit gave {refused:?}; {compared} sets compared"),
+    );
+}
+
 #[entry]
 fn main() -> ! {
     hprintln!(
@@ -758,6 +1034,32 @@ fn main() -> ! {
         &mut r,
         "quantized, embedded at build time",
         black_box(&QUANTIZED),
+    );
+    let mut max_err_psi = check_monitor(&mut r, "embedded at build time", black_box(&TABLE));
+    match EmbeddedTable::from_bytes(black_box(MONITOR_FILE)) {
+        Ok(t) => {
+            let e = check_monitor(&mut r, "decoded with its monitor section", &t);
+            max_err_psi = max_err_psi.max(e);
+        }
+        Err(e) => r.check(false, "monitor table", format_args!("{e:?}")),
+    }
+    check_conformal(&mut r, "embedded at build time", black_box(&TABLE));
+    match EmbeddedTable::from_bytes(black_box(CONFORMAL_FILE)) {
+        Ok(t) => check_conformal(&mut r, "decoded with its conformal section", &t),
+        Err(e) => r.check(false, "conformal table", format_args!("{e:?}")),
+    }
+    hprintln!(
+        "monitor: {} detections replayed in {} windows (W = {}), {} with an alarm, largest PSI \
+         deviation {:e}; conformal: {} sets",
+        MONITOR_ROWS.len(),
+        MONITOR_WINDOWS.len(),
+        MONITOR_WINDOW,
+        MONITOR_WINDOWS
+            .iter()
+            .filter(|w| w.alarms.0 || w.alarms.1 || w.alarms.2)
+            .count(),
+        max_err_psi,
+        SET_CASES.len()
     );
     hprintln!(
         "{} detections on the shipped table, {} on the small one, {} invalid inputs per \
