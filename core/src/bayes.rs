@@ -168,7 +168,9 @@ impl<'a> BayesView<'a> {
 
     /// Scores of one detection into `out` (length K); `scratch` holds one value per
     /// category. Inputs must already be checked (no NaN logit, objectness in `[0, 1]`).
-    #[inline]
+    /// Inlined into each table's entry point, so that a fixed-size table's lengths are
+    /// constants there.
+    #[inline(always)]
     pub(crate) fn score_into<M: Backend>(
         &self,
         logits: &[f32],
