@@ -1,4 +1,4 @@
-//! `Table<K, B_ML, B_MAP, B_BAYES, C>`: a validated, fixed-size table and the layer's
+//! `Table<K, B_ML, B_MAP, B_BAYES, C, N, F>`: a validated, fixed-size table and the layer's
 //! entry points. The table owns arrays; everything it does is done by the
 //! [`TableView`] it lends them to.
 
@@ -17,7 +17,11 @@ use crate::wire::{self, ClassSpec, Settings};
 /// A fitted table for `K` classes: `B_ML` bins in the ML head's histograms, `B_MAP` in
 /// the MAP head's, and, when `B_BAYES > 0`, a Bayes head with `B_BAYES` bins per logit
 /// and `C` categories (`K`, or `K + 1` when the training data had `background` rows).
-/// `B_BAYES` and `C` default to 0: no Bayes head (every version-1 table).
+/// `B_BAYES` and `C` default to 0: no Bayes head (every version-1 table). `N` is the room
+/// for each head's recalibration map, in knots (DESIGN §1.9; 0 by default: a table with a
+/// map is refused with [`DecodeError::MapCapacity`]), and `F = 1` holds the Bayes head's
+/// objectness feature (DESIGN §1.6; 0 by default: such a table is refused with
+/// [`DecodeError::ObjectnessMismatch`], and with `F = 1` a table without it is).
 ///
 /// Every `Table` satisfies the table invariants of DESIGN §1.3 (5): it can only be
 /// obtained from [`Table::from_bytes`], [`Table::from_parts`] or the build-time
