@@ -1340,7 +1340,7 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         10 => c"table has more classes or bins than MLMAP_MAX_CLASSES and MLMAP_MAX_BINS allow",
         11 => c"table's Bayes head has more bins than MLMAP_MAX_BINS_BAYES allows",
         12 => c"table body does not follow the mlmap format",
-        13 => c"table breaks an invariant (a recalibration map's knots included)",
+        13 => c"table breaks an invariant",
         14 => c"a logit is NaN",
         15 => c"objectness is NaN or outside [0, 1]",
         16 => c"a count does not match the table's number of classes, or is 0",
