@@ -24,6 +24,16 @@
  * is refused with `MLMAP_ERR_OVERLAP` before anything is written. NaN is never
  * decided on: mlmap_decide() refuses a NaN score or logit.
  *
+ * Threads, reentrancy and interrupts: the library has no global or static mutable
+ * state and never allocates. Every function is reentrant and may be called from an
+ * interrupt handler or from several threads at once, provided that no object passed to
+ * one call is written by another at the same time: concurrent scoring calls on one
+ * table (it is only read) are safe; decoding into a table while another call reads it
+ * is not (guard it, or decode into a second table and switch a pointer). A monitor's
+ * storage is written by every push: one writer at a time. Each call's stack use is
+ * bounded (docs/EMBEDDING.md gives the figures) and its time is bounded by the table's
+ * shape.
+ *
  * SPDX-License-Identifier: MIT
  */
 
@@ -34,6 +44,37 @@
 
 #include <stddef.h>
 #include <stdint.h>
+
+/**
+ * @defgroup version Version
+ * The version of this header; mlmap_version() gives the library's, which must be the
+ * same (the header and the library come from one build).
+ * @{
+ */
+/** Major version (incompatible API changes). */
+#define MLMAP_VERSION_MAJOR 0
+/** Minor version (compatible additions). */
+#define MLMAP_VERSION_MINOR 1
+/** Patch version (fixes). */
+#define MLMAP_VERSION_PATCH 0
+/** The version as a string, "MAJOR.MINOR.PATCH". */
+#define MLMAP_VERSION_STRING "0.1.0"
+/** @} */
+
+/**
+ * `MLMAP_ALIGN8`: an alignment of 8 bytes on a type, where the compiler offers one
+ * (C11 `_Alignas`, C++11 `alignas`, GCC and Clang `__attribute__`): on 32-bit targets
+ * (e.g. Zephyr's native_sim, i386) a `uint64_t` member alone is aligned to 4 only.
+ */
+#if defined(__cplusplus) && __cplusplus >= 201103L
+#define MLMAP_ALIGN8 alignas(8)
+#elif defined(__STDC_VERSION__) && __STDC_VERSION__ >= 201112L
+#define MLMAP_ALIGN8 _Alignas(8)
+#elif defined(__GNUC__) || defined(__clang__)
+#define MLMAP_ALIGN8 __attribute__((aligned(8)))
+#else
+#define MLMAP_ALIGN8
+#endif
 
 /**
  * @defgroup limits Maximum table shape
@@ -73,7 +114,7 @@
  * only the library reads or writes it; it holds no pointer and may be copied.
  */
 typedef struct mlmap_table {
-  uint64_t opaque_[MLMAP_TABLE_SIZE / 8];
+  MLMAP_ALIGN8 uint64_t opaque_[MLMAP_TABLE_SIZE / 8];
 } mlmap_table_t;
 /** @} */
 
@@ -773,6 +814,38 @@ mlmap_status_t mlmap_decide(const float *scores,
                             const float *logits,
                             size_t k,
                             size_t *class_index);
+
+/**
+ * Decides a batch: `mlmap_decide` on each of `n` rows of K scores and K logits,
+ * row-major (row `r` at `scores + r * k` and `logits + r * k`), the class of row `r`
+ * into `classes[r]`. Stops at the first row with a NaN score or logit; the rows before
+ * it are written.
+ *
+ * @param scores `n * k` scores.
+ * @param logits `n * k` logits.
+ * @param n Number of rows (0: nothing to do).
+ * @param k Classes per row, at least 1.
+ * @param[out] classes Receives `n` class indexes; must not overlap the inputs.
+ * @param classes_len Entries available at `classes`, at least `n`.
+ * @param[out] done Receives the number of rows decided; may be NULL.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_TOO_LARGE`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_SCORE`, `MLMAP_ERR_NAN_LOGIT` (row `*done`).
+ */
+mlmap_status_t mlmap_decide_batch(const float *scores,
+                                  const float *logits,
+                                  size_t n,
+                                  size_t k,
+                                  size_t *classes,
+                                  size_t classes_len,
+                                  size_t *done);
+
+/**
+ * The library's version, `"MAJOR.MINOR.PATCH"` (a static NUL-terminated string):
+ * equal to the header's `MLMAP_VERSION_STRING` when header and library come from one
+ * build.
+ */
+const char *mlmap_version(void);
 
 /**
  * A one-line English description of a status, as a static NUL-terminated string

@@ -1317,6 +1317,111 @@ unsafe fn decide_c(
     unsafe { put(class_index, i) }
 }
 
+/// Decides a batch: `mlmap_decide` on each of `n` rows of K scores and K logits,
+/// row-major (row `r` at `scores + r * k` and `logits + r * k`), the class of row `r`
+/// into `classes[r]`. Stops at the first row with a NaN score or logit; the rows before
+/// it are written.
+///
+/// @param scores `n * k` scores.
+/// @param logits `n * k` logits.
+/// @param n Number of rows (0: nothing to do).
+/// @param k Classes per row, at least 1.
+/// @param[out] classes Receives `n` class indexes; must not overlap the inputs.
+/// @param classes_len Entries available at `classes`, at least `n`.
+/// @param[out] done Receives the number of rows decided; may be NULL.
+/// @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+///   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_TOO_LARGE`,
+///   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_SCORE`, `MLMAP_ERR_NAN_LOGIT` (row `*done`).
+#[no_mangle]
+pub unsafe extern "C" fn mlmap_decide_batch(
+    scores: *const f32,
+    logits: *const f32,
+    n: usize,
+    k: usize,
+    classes: *mut usize,
+    classes_len: usize,
+    done: *mut usize,
+) -> mlmap_status_t {
+    if !done.is_null() {
+        if !(done as usize).is_multiple_of(align_of::<usize>()) {
+            return MLMAP_ERR_MISALIGNED;
+        }
+        // SAFETY: non-NULL and aligned; the caller passes a writable `size_t`.
+        unsafe { *done = 0 };
+    }
+    // SAFETY: the caller passes `n * k` floats at `scores` and `logits` and
+    // `classes_len` writable entries at `classes`.
+    status(unsafe { decide_batch_c(scores, logits, n, k, classes, classes_len, done) })
+}
+
+unsafe fn decide_batch_c(
+    scores: *const f32,
+    logits: *const f32,
+    n: usize,
+    k: usize,
+    classes: *mut usize,
+    classes_len: usize,
+    done: *mut usize,
+) -> Result<(), mlmap_status_t> {
+    check_ptr(scores)?;
+    check_ptr(logits)?;
+    check_ptr(classes)?;
+    if k == 0 {
+        return Err(MLMAP_ERR_LENGTH);
+    }
+    let total = n.checked_mul(k).ok_or(MLMAP_ERR_TOO_LARGE)?;
+    if total > isize::MAX as usize / size_of::<f32>()
+        || n > isize::MAX as usize / size_of::<usize>()
+    {
+        return Err(MLMAP_ERR_TOO_LARGE);
+    }
+    if classes_len < n {
+        return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
+    }
+    // The output is written row by row while the inputs are read: it must not overlap
+    // them.
+    let out_bytes = (classes as usize, n * size_of::<usize>());
+    for input in [
+        (scores as usize, total * size_of::<f32>()),
+        (logits as usize, total * size_of::<f32>()),
+    ] {
+        if overlaps(out_bytes, input) {
+            return Err(MLMAP_ERR_OVERLAP);
+        }
+    }
+    for r in 0..n {
+        // SAFETY: row `r` is inside the `n * k` floats of each input and entry `r` inside
+        // `classes` (checked above).
+        unsafe { decide_c(scores.add(r * k), logits.add(r * k), k, classes.add(r))? };
+        if !done.is_null() {
+            // SAFETY: checked by the caller's entry point (non-NULL, aligned).
+            unsafe { *done = r + 1 };
+        }
+    }
+    Ok(())
+}
+
+/// Whether two byte ranges `(start, len)` share a byte.
+fn overlaps(a: (usize, usize), b: (usize, usize)) -> bool {
+    a.1 > 0 && b.1 > 0 && a.0 < b.0.saturating_add(b.1) && b.0 < a.0.saturating_add(a.1)
+}
+
+/// The library's version, `"MAJOR.MINOR.PATCH"` (a static NUL-terminated string):
+/// equal to the header's `MLMAP_VERSION_STRING` when header and library come from one
+/// build.
+#[no_mangle]
+pub extern "C" fn mlmap_version() -> *const c_char {
+    VERSION.as_ptr()
+}
+
+/// The crate's version as a C string.
+const VERSION: &core::ffi::CStr = match core::ffi::CStr::from_bytes_with_nul(
+    concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes(),
+) {
+    Ok(v) => v,
+    Err(_) => c"unknown",
+};
+
 /// A one-line English description of a status, as a static NUL-terminated string
 /// (never NULL; an unknown value gives "unknown mlmap status").
 ///

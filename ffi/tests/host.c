@@ -540,6 +540,59 @@ static void test_decide(void) {
     EXPECT(mlmap_decide((const float *)((const char *)eq + 2), lg, 2, &c), MLMAP_ERR_MISALIGNED);
 }
 
+/* The batch decide: each row as mlmap_decide (by hand above), stopping at a NaN with
+ * the rows before it written and counted; outputs overlapping the inputs refused. */
+static void test_decide_batch(void) {
+    const float s[4][3] = {{0.3f, 0.3f, 0.3f}, {0.1f, 0.7f, 0.2f}, {0.5f, 0.2f, 0.5f},
+                           {0.2f, 0.2f, 0.6f}};
+    const float l[4][3] = {{-1.0f, 2.5f, 0.4f}, {9.0f, -9.0f, 9.0f}, {1.0f, 5.0f, 1.0f},
+                           {0.0f, 0.0f, 0.0f}};
+    size_t out[4] = {99, 99, 99, 99}, done = 77;
+    EXPECT(mlmap_decide_batch(&s[0][0], &l[0][0], 4, 3, out, 4, &done), MLMAP_OK);
+    CHECK(done == 4 && out[0] == 1 && out[1] == 1 && out[2] == 0 && out[3] == 2);
+    for (size_t r = 0; r < 4; r++) {
+        size_t one = 99;
+        EXPECT(mlmap_decide(s[r], l[r], 3, &one), MLMAP_OK);
+        CHECK(one == out[r]);
+    }
+    EXPECT(mlmap_decide_batch(&s[0][0], &l[0][0], 0, 3, out, 0, &done), MLMAP_OK);
+    CHECK(done == 0);
+    EXPECT(mlmap_decide_batch(&s[0][0], &l[0][0], 4, 3, out, 3, &done),
+           MLMAP_ERR_BUFFER_TOO_SMALL);
+    EXPECT(mlmap_decide_batch(&s[0][0], &l[0][0], 4, 0, out, 4, &done), MLMAP_ERR_LENGTH);
+    EXPECT(mlmap_decide_batch(NULL, &l[0][0], 4, 3, out, 4, &done), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_decide_batch(&s[0][0], &l[0][0], 4, 3, NULL, 4, &done),
+           MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_decide_batch(&s[0][0], &l[0][0], SIZE_MAX / 2, 3, out, SIZE_MAX, &done),
+           MLMAP_ERR_TOO_LARGE);
+    EXPECT(mlmap_decide_batch(&s[0][0], &l[0][0], 4, 3, out, 4, NULL), MLMAP_OK);
+    /* A NaN in row 2: rows 0 and 1 written, *done = 2. */
+    float sn[4][3];
+    memcpy(sn, s, sizeof sn);
+    sn[2][1] = NAN;
+    size_t o2[4] = {99, 99, 99, 99};
+    EXPECT(mlmap_decide_batch(&sn[0][0], &l[0][0], 4, 3, o2, 4, &done), MLMAP_ERR_NAN_SCORE);
+    CHECK(done == 2 && o2[0] == 1 && o2[1] == 1 && o2[2] == 99 && o2[3] == 99);
+    /* The output over the scores: refused before anything is written. */
+    union {
+        float f[12];
+        size_t z[6];
+    } both;
+    memcpy(both.f, s, sizeof both.f);
+    EXPECT(mlmap_decide_batch(both.f, &l[0][0], 2, 3, both.z, 2, &done), MLMAP_ERR_OVERLAP);
+}
+
+/* The header's version and the library's are one, and the table storage is aligned to
+ * 8 bytes whatever the target (MLMAP_ALIGN8). */
+static void test_version_and_alignment(void) {
+    CHECK(strcmp(mlmap_version(), MLMAP_VERSION_STRING) == 0);
+    char want[32];
+    snprintf(want, sizeof want, "%d.%d.%d", MLMAP_VERSION_MAJOR, MLMAP_VERSION_MINOR,
+             MLMAP_VERSION_PATCH);
+    CHECK(strcmp(want, MLMAP_VERSION_STRING) == 0);
+    CHECK(_Alignof(mlmap_table_t) >= 8);
+}
+
 /* NaN is never decided on: a NaN score or logit is an error, and the output is
  * untouched. */
 static void test_decide_nan(void) {
@@ -1324,6 +1377,8 @@ int main(int argc, char **argv) {
     test_head_arguments(&table, mlmap_bayes, mlmap_bayes_batch, "Bayes");
     test_head_arguments(&table, mlmap_open, mlmap_open_batch, "open");
     test_decide();
+    test_decide_batch();
+    test_version_and_alignment();
     test_decide_nan();
     test_decode_table_size(bytes, len);
     test_outputs_in_table(&table);
