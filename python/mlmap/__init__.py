@@ -39,6 +39,11 @@ section; ``Table.conformal_sets(logits, objectness)`` gives the ``(N, K)`` boole
 Fitting across processes or machines (docs/SCALE.md): ``FitStats`` (pass a) of every
 shard, merged (``+``, ``sum``); its ``edges(...)``; ``FitCounts`` (pass b) of every shard
 over those edges, merged; ``finish(stats, counts)``: the bytes ``fit`` gives on all rows.
+
+scikit-learn: ``Calibrator(head="open", ...)`` is an estimator over ``fit`` and ``tune``
+(``fit``, ``predict_proba``, ``predict``, ``get_params``, ``set_params``) that goes after a
+model in a ``Pipeline``; a pandas DataFrame of logits names the classes by its columns,
+and labels may be class names (``"background"`` for background rows).
 """
 
 from ._mlmap import (
@@ -57,8 +62,10 @@ from ._mlmap import (
     monitor_fit,
     tune,
 )
+from ._calibrator import Calibrator
 
 __all__ = [
+    "Calibrator",
     "FORMAT_VERSION",
     "HEADS",
     "FitCounts",
