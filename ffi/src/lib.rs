@@ -1415,12 +1415,12 @@ pub extern "C" fn mlmap_version() -> *const c_char {
 }
 
 /// The crate's version as a C string.
-const VERSION: &core::ffi::CStr = match core::ffi::CStr::from_bytes_with_nul(
-    concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes(),
-) {
-    Ok(v) => v,
-    Err(_) => c"unknown",
-};
+const VERSION: &core::ffi::CStr =
+    match core::ffi::CStr::from_bytes_with_nul(concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes())
+    {
+        Ok(v) => v,
+        Err(_) => c"unknown",
+    };
 
 /// A one-line English description of a status, as a static NUL-terminated string
 /// (never NULL; an unknown value gives "unknown mlmap status").
