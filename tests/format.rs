@@ -237,6 +237,26 @@ fn wrong_magic_is_not_a_table() {
     assert_eq!(Small::from_bytes(b"MLMP"), Err(DecodeError::Truncated));
 }
 
+/// Found by the `c_api` fuzz target: a header announcing no class and the largest Bayes
+/// shape made the host decoder allocate room for the objectness feature's terms (B * C
+/// floats, gigabytes) before finding the body empty. Refused without allocating more
+/// than the body backs.
+#[cfg(feature = "std")]
+#[test]
+fn a_header_without_classes_allocates_nothing_for_the_bayes_head() {
+    // magic, version 2, K = 0, ML and MAP bins 1, Bayes bins and categories 65535
+    // (varint FF FF 03 each), settings, no class, CRC.
+    let mut b = b"MLMP".to_vec();
+    b.extend_from_slice(&[2, 0, 1, 1, 0xff, 0xff, 0x03, 0xff, 0xff, 0x03]);
+    b.extend_from_slice(&[0, 0]);
+    b.extend_from_slice(&0.01f32.to_le_bytes());
+    b.extend_from_slice(&0.01f32.to_le_bytes());
+    b.push(0);
+    let crc = crate::support::crc32(&b);
+    b.extend_from_slice(&crc.to_le_bytes());
+    assert!(mlmap::host::DynTable::from_bytes(&b).is_err());
+}
+
 #[test]
 fn other_versions_are_unsupported() {
     // Version 2 is read, but requires a Bayes section: a version-1 body under a

@@ -321,7 +321,11 @@ impl DynTable {
                 lambda: 0.0,
                 log_lambda: 0.0,
                 open: None,
-                objectness: Some((Axis::ZERO, vec![0.0; categories * bins_bayes])),
+                // Room for the objectness feature, whose B * C terms a table with K >= 1
+                // logits' terms (counted in the check above) bounds; a header with K = 0
+                // (invalid: refused after parsing) gets none, so that it cannot ask for
+                // an allocation the body does not back.
+                objectness: Some((Axis::ZERO, vec![0.0; categories * bins_bayes * k.min(1)])),
             }),
             maps: core::array::from_fn(|_| vec![Knot::ZERO; MAX_KNOTS]),
         };
