@@ -220,12 +220,7 @@ impl<'a> ConformalSpec<'a> {
         if reserved != 0 || reserved2 != 0 {
             return Err(malformed);
         }
-        let has = match head {
-            Head::Ml | Head::Map => true,
-            Head::Bayes => table.bayes().is_some(),
-            Head::Open => table.open().is_some(),
-        };
-        if !has {
+        if !table.has_head(head) {
             return Err(ConformalError::MissingHead { head });
         }
         let expected = u16::try_from(table.k()).unwrap_or(u16::MAX);

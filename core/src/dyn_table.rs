@@ -188,12 +188,7 @@ impl DynTable {
     /// (a table decoded from a version-1 or version-2 file may hold one).
     pub fn with_map(mut self, head: Head, knots: Vec<Knot>) -> Result<Self, TableError> {
         let map_err = |error| TableError::Map { head, error };
-        let present = match head {
-            Head::Ml | Head::Map => true,
-            Head::Bayes => self.bayes.is_some(),
-            Head::Open => self.open().is_some(),
-        };
-        if !present {
+        if !self.view().has_head(head) {
             return Err(map_err(MapError::NoHead));
         }
         recal::check(knots.as_slice()).map_err(map_err)?;

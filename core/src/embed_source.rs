@@ -244,37 +244,18 @@ pub fn quantized_source(
         .get(bytes.len() - q.section_len()..)
         .unwrap_or_default();
     let base = section.as_ptr() as usize;
-    // Every slice of `q` borrows `section`: name it by its offset.
-    let part = |p: &[u8]| {
-        if p.is_empty() {
+    // Every slice of `q` borrows `section`: name it by its offset, through the
+    // constructor `fun` of its element size (1, 4 or 8 bytes).
+    let named = |fun: &str, ptr: *const u8, len: usize| -> String {
+        if len == 0 {
             return "&[]".into();
         }
-        format!(
-            "E::part(&QUANTIZED_SECTION, {}, {})",
-            (p.as_ptr() as usize).wrapping_sub(base),
-            p.len()
-        )
+        let at = (ptr as usize).wrapping_sub(base);
+        format!("E::{fun}(&QUANTIZED_SECTION, {at}, {len})")
     };
-    let part4 = |p: &[[u8; 4]]| {
-        if p.is_empty() {
-            return "&[]".into();
-        }
-        format!(
-            "E::part4(&QUANTIZED_SECTION, {}, {})",
-            (p.as_ptr() as usize).wrapping_sub(base),
-            p.len()
-        )
-    };
-    let part8 = |p: &[[u8; 8]]| {
-        if p.is_empty() {
-            return "&[]".into();
-        }
-        format!(
-            "E::part8(&QUANTIZED_SECTION, {}, {})",
-            (p.as_ptr() as usize).wrapping_sub(base),
-            p.len()
-        )
-    };
+    let part = |p: &[u8]| named("part", p.as_ptr(), p.len());
+    let part4 = |p: &[[u8; 4]]| named("part4", p.as_ptr().cast(), p.len());
+    let part8 = |p: &[[u8; 8]]| named("part8", p.as_ptr().cast(), p.len());
     let m = &q.meta;
     let maps: Vec<String> = m.maps.iter().map(|k| part8(k)).collect();
     let objectness = match m.objectness {

@@ -61,6 +61,17 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
         self.bayes
     }
 
+    /// Whether the table has `head` (ML and MAP always; Bayes with a Bayes head; open
+    /// with the open head's parameters).
+    #[inline]
+    pub fn has_head(&self, head: Head) -> bool {
+        match head {
+            Head::Ml | Head::Map => true,
+            Head::Bayes => self.bayes.is_some(),
+            Head::Open => self.open().is_some(),
+        }
+    }
+
     /// The recalibration map of `head` (DESIGN §1.9), if the table holds one; every
     /// scoring call of this view applies it.
     #[inline]

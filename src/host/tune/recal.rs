@@ -195,12 +195,7 @@ pub fn choose_maps(
     let mut choices = Vec::new();
     let folds = [Fold::new(val, 0), Fold::new(val, 1)];
     for head in [Head::Ml, Head::Map, Head::Bayes, Head::Open] {
-        let present = match head {
-            Head::Bayes => table.bayes().is_some(),
-            Head::Open => table.open().is_some(),
-            Head::Ml | Head::Map => true,
-        };
-        if !present {
+        if !table.view().has_head(head) {
             continue;
         }
         let pts = points(&table, head, val);

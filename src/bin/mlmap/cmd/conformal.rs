@@ -45,12 +45,7 @@ pub fn run(args: &ConformalArgs) -> Result<()> {
         )));
     }
     let (table, bytes) = read_table(&args.table)?;
-    let has = match args.head {
-        Head::Ml | Head::Map => true,
-        Head::Bayes => table.bayes().is_some(),
-        Head::Open => table.open().is_some(),
-    };
-    if !has {
+    if !table.view().has_head(args.head) {
         return Err(CliError::input(
             &args.table,
             format!("has no {} head for --head {}", args.head, args.head.name()),
