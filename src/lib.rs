@@ -80,6 +80,8 @@ pub use mlmap_core::{
 };
 
 pub mod embedded;
+#[cfg(feature = "invariants")]
+#[cfg_attr(docsrs, doc(cfg(feature = "invariants")))]
 pub mod invariants;
 
 #[doc(hidden)]

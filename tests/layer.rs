@@ -262,6 +262,7 @@ fn bayes_outside_every_axis_is_os_times_prior() {
 /// DESIGN §1.6: scores are finite in `[0, OS]`; they sum to `OS` without a background
 /// category and to less with one (by the background's share).
 #[test]
+#[cfg(feature = "invariants")]
 fn bayes_scores_sum_to_os_without_background_and_less_with() {
     let rows = goldens(SMALL_CSV)
         .into_iter()
@@ -1170,6 +1171,7 @@ mod bayes {
     /// Every row of the test split against the formula in `f64` from the stored terms:
     /// within the stated tolerance (and the measured error is reported).
     #[test]
+    #[cfg(feature = "invariants")]
     fn test_split_follows_the_formula_within_the_stated_tolerance() {
         use mlmap::invariants::{bayes_reference, bayes_score_tolerance, check_scores, Sum};
         let t = shipped();

@@ -41,6 +41,7 @@ pub const SMALL_CSV: &str = include_str!("golden/layer/small.csv");
 pub const SHIPPED_CSV: &str = include_str!("golden/layer/default.csv");
 /// Golden scores of the shipped table for every 20th row of `examples/data/test.csv`
 /// (the case column holds the row's id).
+#[cfg(feature = "std")]
 pub const TEST_SPLIT_CSV: &str = include_str!("golden/layer/test_split.csv");
 
 pub fn small() -> Small {

@@ -14,10 +14,12 @@ mod format;
 
 /// One proptest property per invariant of DESIGN §1.3, on random tables of four shapes,
 /// checked by the `mlmap::invariants` checkers that the fuzz targets share.
+#[cfg(feature = "invariants")]
 mod invariants;
 
 /// The quantized table: its heads against the numpy goldens, bit-for-bit agreement with the
 /// f32 heads, size, malformed sections.
+#[cfg(feature = "invariants")]
 mod quantized;
 
 /// Recalibration maps (DESIGN §1.9): every head after its map against the numpy

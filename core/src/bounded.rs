@@ -508,6 +508,7 @@ mod tests {
     }
 
     /// `bytes` with its CRC recomputed.
+    #[cfg(feature = "alloc")]
     fn with_crc(mut bytes: Vec<u8>) -> Vec<u8> {
         let n = bytes.len() - 4;
         let crc = wire::CRC.checksum(&bytes[..n]);

@@ -110,18 +110,38 @@ pub enum ConformalError {
     BufferTooSmall,
 }
 
+impl ConformalError {
+    /// The variant's message: what `Display` says (with the variant's values where it
+    /// has any) and what `defmt` prints.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Absent => "input holds no conformal section (magic `MLMS`)",
+            Self::Corrupted => "conformal section checksum does not match its contents",
+            Self::UnsupportedVersion { .. } => "conformal section version is not supported",
+            Self::Malformed => "conformal section is malformed",
+            Self::MissingHead { .. } => "conformal section thresholds a head the table does not have",
+            Self::ShapeMismatch { .. } => "conformal section is for another number of classes than the table",
+            Self::TableMismatch => "conformal section was written for another table (table CRC differs)",
+            Self::Alpha => "conformal alpha must be in (0, 1)",
+            Self::Threshold { .. } => "a conformal threshold is NaN, outside [0, 1], or does not match its calibration rows",
+            Self::BufferTooSmall => "buffer too small for the conformal section",
+        }
+    }
+}
+
 impl core::fmt::Display for ConformalError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
-            Self::Absent => f.write_str("input holds no conformal section (magic `MLMS`)"),
-            Self::Corrupted => {
-                f.write_str("conformal section checksum does not match its contents")
-            }
+            Self::Absent
+            | Self::Corrupted
+            | Self::Malformed
+            | Self::TableMismatch
+            | Self::Alpha
+            | Self::BufferTooSmall => f.write_str(self.message()),
             Self::UnsupportedVersion { found } => write!(
                 f,
                 "conformal section version {found} is not supported (this build reads {CONFORMAL_VERSION})"
             ),
-            Self::Malformed => f.write_str("conformal section is malformed"),
             Self::MissingHead { head } => write!(
                 f,
                 "conformal section thresholds the {head} head, which the table does not have"
@@ -130,16 +150,11 @@ impl core::fmt::Display for ConformalError {
                 f,
                 "conformal section is for {found} classes, the table has {expected}"
             ),
-            Self::TableMismatch => {
-                f.write_str("conformal section was written for another table (table CRC differs)")
-            }
-            Self::Alpha => f.write_str("conformal alpha must be in (0, 1)"),
             Self::Threshold { class } => write!(
                 f,
                 "conformal threshold of class {class} is NaN, outside [0, 1], or does not \
                  match its calibration rows"
             ),
-            Self::BufferTooSmall => f.write_str("buffer too small for the conformal section"),
         }
     }
 }

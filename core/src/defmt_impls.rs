@@ -47,13 +47,7 @@ impl Format for TableError {
 
 impl Format for crate::MapError {
     fn format(&self, f: Formatter<'_>) {
-        match self {
-            Self::KnotCount => write!(f, "knot count out of range"),
-            Self::Ends => write!(f, "ends not at 0 and 1"),
-            Self::Order => write!(f, "knots not increasing"),
-            Self::Values => write!(f, "values out of (0, 1] or decreasing"),
-            Self::NoHead => write!(f, "no such head"),
-        }
+        write!(f, "{=str}", self.message())
     }
 }
 
@@ -277,30 +271,30 @@ impl Format for crate::QField {
 
 impl Format for crate::QTableError {
     fn format(&self, f: Formatter<'_>) {
+        let m = self.message();
         match *self {
-            Self::NotQuantized => write!(f, "NotQuantized"),
-            Self::Corrupted => write!(f, "Corrupted"),
-            Self::UnsupportedVersion { found } => write!(f, "UnsupportedVersion({})", found),
-            Self::ShapeMismatch { expected, found } => {
-                write!(f, "ShapeMismatch({}, {})", expected, found)
+            Self::UnsupportedVersion { found } => write!(f, "{=str} (found {})", m, found),
+            Self::ShapeMismatch { expected, found } => write!(
+                f,
+                "{=str} (found {} classes of int{}, expected {} of int{})",
+                m, found.0, found.1, expected.0, expected.1
+            ),
+            Self::Invalid { field, class } => {
+                write!(f, "{=str} (class {}: {})", m, class, field)
             }
-            Self::TableMismatch => write!(f, "TableMismatch"),
-            Self::Malformed => write!(f, "Malformed"),
-            Self::Invalid { field, class } => write!(f, "Invalid({}, class {})", field, class),
+            _ => write!(f, "{=str}", m),
         }
     }
 }
 
 impl Format for crate::QuantizeError {
     fn format(&self, f: Formatter<'_>) {
+        let m = self.message();
         match *self {
-            Self::Bits => write!(f, "Bits"),
-            Self::Length => write!(f, "Length"),
-            Self::Scale { class } => write!(f, "Scale({})", class),
-            Self::ZeroPoint { class } => write!(f, "ZeroPoint({})", class),
-            Self::NoBayesHead => write!(f, "NoBayesHead"),
-            Self::BufferTooSmall => write!(f, "BufferTooSmall"),
-            Self::TooLarge => write!(f, "TooLarge"),
+            Self::Scale { class } | Self::ZeroPoint { class } => {
+                write!(f, "{=str} (class {})", m, class)
+            }
+            _ => write!(f, "{=str}", m),
         }
     }
 }

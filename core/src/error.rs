@@ -218,15 +218,23 @@ pub enum MapError {
     NoHead,
 }
 
-impl fmt::Display for MapError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
+impl MapError {
+    /// The variant's message: what `Display` says (with the variant's values where it
+    /// has any) and what `defmt` prints.
+    pub const fn message(self) -> &'static str {
+        match self {
             Self::KnotCount => "it needs between 2 and 32 knots",
             Self::Ends => "its first knot is not at 0 or its last not at 1",
             Self::Order => "its knots are not strictly increasing in x",
             Self::Values => "its values are not in (0, 1] and non-decreasing",
             Self::NoHead => "the table has no such head",
-        })
+        }
+    }
+}
+
+impl fmt::Display for MapError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.message())
     }
 }
 

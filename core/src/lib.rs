@@ -32,6 +32,8 @@ mod bounded;
 mod conformal;
 #[cfg(feature = "defmt")]
 mod defmt_impls;
+#[cfg(feature = "defmt")]
+mod defmt_sections;
 #[cfg(feature = "alloc")]
 mod dyn_table;
 #[doc(hidden)]

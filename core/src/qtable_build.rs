@@ -59,20 +59,36 @@ pub enum QuantizeError {
     TooLarge,
 }
 
+impl QuantizeError {
+    /// The variant's message: what `Display` says (with the variant's values where it
+    /// has any) and what `defmt` prints.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Bits => "quantized codes must have 8 or 16 bits",
+            Self::Length => "scales and zero points must have one value per class",
+            Self::Scale { .. } => "a class's scale is not finite and positive",
+            Self::ZeroPoint { .. } => "a class's zero point is outside the code range",
+            Self::NoBayesHead => "the table has no Bayes head to quantize",
+            Self::BufferTooSmall => "output buffer is too small for the section",
+            Self::TooLarge => "the quantized section would exceed 4 GiB",
+        }
+    }
+}
+
 impl core::fmt::Display for QuantizeError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match *self {
-            Self::Bits => f.write_str("quantized codes must have 8 or 16 bits"),
-            Self::Length => f.write_str("scales and zero points must have one value per class"),
+            Self::Bits
+            | Self::Length
+            | Self::NoBayesHead
+            | Self::BufferTooSmall
+            | Self::TooLarge => f.write_str(self.message()),
             Self::Scale { class } => {
                 write!(f, "scale of class {class} is not finite and positive")
             }
             Self::ZeroPoint { class } => {
                 write!(f, "zero point of class {class} is outside the code range")
             }
-            Self::NoBayesHead => f.write_str("the table has no Bayes head to quantize"),
-            Self::BufferTooSmall => f.write_str("output buffer is too small for the section"),
-            Self::TooLarge => f.write_str("the quantized section would exceed 4 GiB"),
         }
     }
 }

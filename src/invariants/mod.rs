@@ -1,9 +1,9 @@
 //! Checkers for the invariants of DESIGN §1.3, written against the public API only.
 //!
 //! The property tests and the fuzz targets of this crate check every score and every
-//! table they meet with these functions, so that both test the very same rules; an
-//! application can run them too, e.g. on a table received over the air before it is
-//! trusted, or on the scores of a new head during development. Each checker returns
+//! table they meet with these functions, so that both test the very same rules. They are
+//! a test aid behind the feature `invariants`, outside the crate's API and its semver
+//! promise: a table the layer accepts already satisfies every table invariant. Each checker returns
 //! `Ok(())` or the first [`Violation`] it finds, whose message names the invariant (its
 //! number in DESIGN §1.3), the class and the values. They never allocate and never panic.
 //!
