@@ -14,9 +14,10 @@
 #   tools/m4f_counts.sh            # the table
 #   tools/m4f_counts.sh --check    # and fail on a bad counter check, a C checksum other
 #                                  # than Rust's, or a C / Rust ratio above its bound
+#   M4F_OUT=DIR tools/m4f_counts.sh   # also keeps the logs and the two images in DIR
 #
 # Needs qemu-system-arm, arm-none-eabi-gcc (newlib), the thumbv7em-none-eabihf Rust
-# target (.ci/thumb-toolchain.sh) and llvm-objdump/llvm-nm; without them it fails
+# target (.ci/thumb-toolchain.sh) and python3; without them it fails
 # (MLMAP_ALLOW_SKIP=1 skips outside CI). Installing them is .ci/ffi.sh's job.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,25 +27,14 @@ unset MLMAP_TABLE MLMAP_MAX_CLASSES MLMAP_MAX_BINS MLMAP_MAX_BINS_BAYES MLMAP_FA
 # shellcheck source=.ci/thumb-toolchain.sh
 source .ci/thumb-toolchain.sh
 
-llvm_tool() { # $1 = tool name without the llvm- prefix
-    local t
-    for t in "llvm-$1" "llvm-$1-"{19,18,17,16,15,14}; do
-        command -v "$t" >/dev/null && { command -v "$t"; return 0; }
-    done
-    t="$(rustc --print sysroot)/lib/rustlib/$(rustc -vV | sed -n 's/^host: //p')/bin/llvm-$1"
-    [[ -x "$t" ]] && { echo "$t"; return 0; }
-    return 1
-}
 thumb_acquire >/dev/null
-OBJDUMP=$(llvm_tool objdump || true)
-NM=$(llvm_tool nm || true)
 if ! command -v qemu-system-arm >/dev/null || ! command -v arm-none-eabi-gcc >/dev/null ||
-    [[ "$THUMB_VIA" == none || -z "$OBJDUMP" || -z "$NM" ]] || ! command -v python3 >/dev/null; then
+    [[ "$THUMB_VIA" == none ]] || ! command -v python3 >/dev/null; then
     proof_not_run "the Cortex-M4F instruction counts" \
         "qemu-system-arm:   $(command -v qemu-system-arm || echo missing)" \
         "arm-none-eabi-gcc: $(command -v arm-none-eabi-gcc || echo missing)" \
         "Rust target $THUMB_TARGET: $THUMB_VIA" \
-        "llvm-objdump, llvm-nm: ${OBJDUMP:-missing}, ${NM:-missing}"
+        "python3: $(command -v python3 || echo missing)"
 fi
 
 work=$(mktemp -d)
@@ -99,6 +89,11 @@ for lang in rust c; do
     }
 done
 echo "ok: each bench counted the same twice"
+if [[ -n "${M4F_OUT:-}" ]]; then # keep the logs and images
+    mkdir -p "$M4F_OUT"
+    cp "$work/rust.log" "$work/c.log" "$rust_elf" "$c_elf" "$M4F_OUT/"
+fi
 echo
-python3 tools/m4f_report.py "$work/rust.log" "$work/c.log" "$rust_elf" "$c_elf" "$OBJDUMP" "$NM" \
+python3 tools/m4f_report.py "$work/rust.log" "$work/c.log" "$rust_elf" "$c_elf" \
+    arm-none-eabi-objdump arm-none-eabi-nm \
     "${check[@]}"

@@ -7,7 +7,8 @@
  * one tick is 40 instructions. Each batch scores the ROWS detections of rows.h (the
  * first rows of examples/data/test.csv) with one head, each call a real call into the
  * static library; `noop` is the same loop around a copy of the logits, `sigmoid` a
- * plain C Sigmoid layer (newlib's expf). The deepest stack of each batch is measured
+ * plain C Sigmoid layer (newlib's expf); the `batch` rows score all rows in one batch call
+ * (mlmap_ml_batch, ...), then sum the first scores. The deepest stack of each batch is measured
  * by painting STACK_PROBE bytes below the caller's frame.
  *
  * Output lines, over semihosting: `bench c HEAD TABLE TICKS ROWS STACK CHECKSUM`, the
@@ -89,6 +90,20 @@ typedef float (*batch_fn)(const mlmap_table_t *);
         return sum;                                                                          \
     }
 
+static float scores[ROWS][3];
+
+/* One batch call over every row, then the first scores summed in row order. */
+#define BATCH_CALL(name, call)                                                               \
+    __attribute__((noinline)) static float name(const mlmap_table_t *t) {                     \
+        size_t done = 0;                                                                     \
+        if (call(t, &rows_x[0][0], ROWS, 3, rows_os, &scores[0][0], 3 * ROWS, &done) !=       \
+            MLMAP_OK)                                                                        \
+            return 0.0f;                                                                     \
+        float sum = 0.0f;                                                                    \
+        for (size_t r = 0; r < ROWS; r++) sum += scores[r][0];                               \
+        return sum;                                                                          \
+    }
+
 static mlmap_status_t noop(const mlmap_table_t *t, const float *x, size_t n, float os,
                            float *out, size_t len) {
     (void)t, (void)os, (void)len;
@@ -115,6 +130,10 @@ BATCH(c_ml, mlmap_ml)
 BATCH(c_map, mlmap_map)
 BATCH(c_bayes, mlmap_bayes)
 BATCH(c_open, mlmap_open)
+BATCH_CALL(c_ml_batch, mlmap_ml_batch)
+BATCH_CALL(c_map_batch, mlmap_map_batch)
+BATCH_CALL(c_bayes_batch, mlmap_bayes_batch)
+BATCH_CALL(c_open_batch, mlmap_open_batch)
 
 static void run(const char *head, const char *table, batch_fn f, const mlmap_table_t *t) {
     volatile batch_fn vf = f;
@@ -170,6 +189,10 @@ int main(void) {
     run("open", "default", c_open, &shipped);
     run("open", "small_open", c_open, &small_open);
     run("open", "small_maps", c_open, &small_maps);
+    run("ml", "batch", c_ml_batch, &shipped);
+    run("map", "batch", c_map_batch, &shipped);
+    run("bayes", "batch", c_bayes_batch, &shipped);
+    run("open", "batch", c_open_batch, &shipped);
     put_str("done\n");
     return 0;
 }

@@ -38,8 +38,8 @@ use core::mem::{align_of, size_of};
 use core::ptr;
 
 use mlmap::{
-    decide, Bounded, BoundedTable, DecodeError, EdgeMode, FastMath, Head, InferError, Libm,
-    TableError, TableView, UpperTail,
+    decide, Bounded, BoundedTable, DecodeError, EdgeMode, Head, InferError, Libm, TableError,
+    TableView, UpperTail,
 };
 
 mod limits {
@@ -697,13 +697,10 @@ unsafe fn class_index_of(
     unsafe { put(class_index, found) }
 }
 
-/// Scores one detection with `K`, the table's class count, known at compile time (and
-/// `K1 = K + 1`): the layer's loops then have constant trip counts, as for the
-/// fixed-size Rust `Table`. The Bayes and open heads get a scratch of exactly their
-/// categories (K, or K + 1 with `background`), so that their loops over the categories
-/// have constant trip counts too.
+/// Scores one detection with `K`, the table's class count, known at compile time: the
+/// layer's loops then have constant trip counts, as for the fixed-size Rust `Table`.
 #[inline(always)]
-fn score_k<const K: usize, const K1: usize>(
+fn score_k<const K: usize>(
     v: &View<'_>,
     head: Head,
     x: &[f32],
@@ -714,22 +711,9 @@ fn score_k<const K: usize, const K1: usize>(
         return Err(InferError::Length);
     };
     let mut scratch = [0.0f32; K];
-    let categories = v.bayes().map_or(0, |b| b.categories());
     match head {
         Head::Ml => v.ml_into(x, objectness, out, &mut scratch),
         Head::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
-        // The backend of `Table::bayes` and `Table::open` (and of
-        // `TableView::score_into`, which the other class counts run).
-        Head::Bayes if categories == K1 => {
-            v.bayes_into::<FastMath>(x, objectness, out, &mut [0.0f32; K1])
-        }
-        Head::Bayes if categories == K => {
-            v.bayes_into::<FastMath>(x, objectness, out, &mut scratch)
-        }
-        Head::Open if categories == K1 => {
-            v.open_into::<FastMath>(x, objectness, out, &mut [0.0f32; K1])
-        }
-        Head::Open if categories == K => v.open_into::<FastMath>(x, objectness, out, &mut scratch),
         Head::Bayes | Head::Open => score_categories(v, head, x, objectness, out),
     }
 }
@@ -762,9 +746,7 @@ fn score(
     macro_rules! dispatch {
         ($($k:literal)*) => {
             match x.len() {
-                $($k if FAST_CLASSES.contains(&$k) => {
-                    score_k::<$k, { $k + 1 }>(v, head, x, objectness, out)
-                })*
+                $($k if FAST_CLASSES.contains(&$k) => score_k::<$k>(v, head, x, objectness, out),)*
                 _ => {
                     let mut scratch = [0.0f32; MAX_CLASSES];
                     let s = scratch.get_mut(..x.len()).unwrap_or(&mut []);

@@ -26,7 +26,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{entry, exception, ExceptionFrame};
 use cortex_m_semihosting::{debug, hprintln};
 use mlmap::baseline::sigmoid;
-use mlmap::{InferError, Libm, QTable, Scores, Table};
+use mlmap::{Bounded, BoundedTable, FastMath, InferError, Libm, QTable, Scores, Table, TableView};
 
 /// Detections per batch: the rows the host's instruction counts use too.
 const ROWS: usize = 4096;
@@ -56,6 +56,11 @@ type Shipped = Table<3, 22, 17, 22, 4>;
 type Small = Table<3, 4, 2, 4, 4>;
 type SmallMaps = Table<3, 4, 2, 4, 4, { mlmap::MAX_KNOTS }>;
 type Q8<'a> = QTable<'a, 3, i8>;
+/// The table type behind the C API's `mlmap_table_t` at its default maxima (16 classes,
+/// 64 bins per head, 17 Bayes categories): the shape is read at run time.
+type CTable = BoundedTable<16, 64, 64, 64, 17, { mlmap::MAX_KNOTS }, 1>;
+/// Its view (built once per batch).
+type CView<'a> = TableView<'a, Bounded<64>, Bounded<64>>;
 
 /// One detection: logits and objectness.
 #[derive(Clone, Copy)]
@@ -178,6 +183,25 @@ batch!(rust_open, Shipped, Row, |t, r| t.open(&r.x, r.os));
 batch!(rust_small_open, Small, Row, |t, r| t.open(&r.x, r.os));
 batch!(rust_small_open_map, SmallMaps, Row, |t, r| t
     .open(&r.x, r.os));
+/// A head on the C API's table type, from Rust, into arrays of the table's K.
+macro_rules! scored {
+    ($call:expr) => {{
+        let mut out = [0.0f32; 3];
+        $call(&mut out).map(|()| Scores(out))
+    }};
+}
+batch!(bounded_ml, CView<'_>, Row, |v, r| scored!(
+    |o: &mut [f32; 3]| v.ml_into(&r.x, r.os, o, &mut [0.0; 3])
+));
+batch!(bounded_map, CView<'_>, Row, |v, r| scored!(
+    |o: &mut [f32; 3]| v.map_into::<Libm>(&r.x, r.os, o, &mut [0.0; 3])
+));
+batch!(bounded_bayes, CView<'_>, Row, |v, r| scored!(
+    |o: &mut [f32; 3]| v.bayes_into::<FastMath>(&r.x, r.os, o, &mut [0.0; 4])
+));
+batch!(bounded_open, CView<'_>, Row, |v, r| scored!(
+    |o: &mut [f32; 3]| v.open_into::<FastMath>(&r.x, r.os, o, &mut [0.0; 4])
+));
 batch!(rust_q8_noop, Q8<'_>, QRow, |_q, r| Ok(Scores(
     r.c.map(f32::from)
 )));
@@ -272,6 +296,14 @@ fn main() -> ! {
         fail("default_q8.mlmap's section does not read")
     };
 
+    let mut bounded = CTable::new();
+    if bounded.decode(black_box(TABLE_FILE)).is_err() {
+        fail("the shipped table does not decode into a BoundedTable")
+    }
+    let Some(view) = bounded.view() else {
+        fail("an empty BoundedTable")
+    };
+
     let r = &rows[..];
     run("noop", "default", rust_noop, &shipped, r);
     run("sigmoid", "default", rust_sigmoid, &shipped, r);
@@ -279,6 +311,10 @@ fn main() -> ! {
     run("map", "default", rust_map, &shipped, r);
     run("bayes", "default", rust_bayes, &shipped, r);
     run("open", "default", rust_open, &shipped, r);
+    run("ml", "bounded", bounded_ml, &view, r);
+    run("map", "bounded", bounded_map, &view, r);
+    run("bayes", "bounded", bounded_bayes, &view, r);
+    run("open", "bounded", bounded_open, &view, r);
     run("open", "small_open", rust_small_open, &small, r);
     run("open", "small_maps", rust_small_open_map, &maps, r);
     let q = &qrows[..];
