@@ -4,10 +4,12 @@
 //! With `-icount shift=0` QEMU advances its virtual clock by exactly 1 ns per executed
 //! instruction, and SysTick, clocked by the board's 25 MHz CPU clock, counts one tick per
 //! 40 ns: 40 instructions per tick, read before and after a batch. A batch is the first
-//! [`ROWS`] rows of `examples/data/test.csv`, scored once each by one head through an
-//! `#[inline(never)]` function (the head's code inlined into its loop, as a firmware
-//! would call it); the same loop around a copy of the logits (`noop`) is the cost of the
-//! loop alone. Two calibration loops of known length (2 and 3 instructions per
+//! [`ROWS`] rows of `examples/data/test.csv`, scored once each by one head in the loop of
+//! an `#[inline(never)]` function (the head's call inlined into it or not, as the
+//! compiler decides for any firmware); the same loop around a copy of the logits
+//! (`noop`) is the cost of the loop alone. The heads run on `Table` (the shape fixed at
+//! compile time), on the C API's `BoundedTable` (the shape read at run time) and on the
+//! int8 `QTable`. Three calibration loops of known length (2 or 3 instructions per
 //! iteration) check the counter before anything else is measured.
 //!
 //! For each batch the firmware also measures the deepest stack below the caller's
@@ -59,7 +61,7 @@ type Q8<'a> = QTable<'a, 3, i8>;
 /// The table type behind the C API's `mlmap_table_t` at its default maxima (16 classes,
 /// 64 bins per head, 17 Bayes categories): the shape is read at run time.
 type CTable = BoundedTable<16, 64, 64, 64, 17, { mlmap::MAX_KNOTS }, 1>;
-/// Its view (built once per batch).
+/// Its view (built once, before the batches, as `ffi/examples/bounded_count.rs` does).
 type CView<'a> = TableView<'a, Bounded<64>, Bounded<64>>;
 
 /// One detection: logits and objectness.
@@ -154,8 +156,8 @@ fn calibrate(per_iteration: u32, iterations: u32) -> (u32, u32) {
     (per_iteration * iterations, (elapsed(a, b) - empty) * 40)
 }
 
-/// A batch through one head: `$name` scores every row of `$rows` with `$call` (`t`,
-/// `row`) on the table type `$t`.
+/// A batch through one head: the function `$name` scores every row (`$row`) with
+/// `$call` on a table of type `$t`, and sums the first scores.
 macro_rules! batch {
     ($name:ident, $t:ty, $row:ty, |$tt:ident, $r:ident| $call:expr) => {
         #[inline(never)]
