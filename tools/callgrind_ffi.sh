@@ -18,7 +18,7 @@ trap 'rm -rf "$out"' EXIT
 (cd ffi && cargo rustc --quiet --release --crate-type staticlib)
 cc -std=c11 -O2 -Iinclude ffi/tests/instr_count.c -Wl,--gc-sections \
     ffi/target/release/libmlmap_ffi.a -lm -o "$out/c_count"
-cargo build --quiet --release --features micromath --example instr_count
+cargo build --quiet --release --features micromath,std --example instr_count
 rust="target/release/examples/instr_count"
 (cd ffi && cargo build --quiet --release --features std --example bounded_count)
 bounded="ffi/target/release/examples/bounded_count"
