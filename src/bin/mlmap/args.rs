@@ -308,8 +308,8 @@ pub struct ApplyArgs {
     /// Rows to score (CSV file or NPY directory; labels optional).
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
-    /// The output: a CSV file, or an NPY directory (when the path ends in `/`, names an
-    /// existing directory, or with `--format npy`): `<head>.npy` (N x K float32 scores)
+    /// The output: a CSV file, or an NPY directory (when the path ends in `/`, or with
+    /// `--format npy`): `<head>.npy` (N x K float32 scores)
     /// and `<head>_pred.npy` (int32 class indices) per head, `sets.npy`, `labels.npy`,
     /// `ids.txt` and `classes.txt`. An existing NPY output is replaced as a whole.
     #[arg(long, short, value_name = "FILE.csv|DIR/")]

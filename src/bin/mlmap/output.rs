@@ -19,7 +19,8 @@ pub fn check_target(path: &Path) -> Result<()> {
     if path.is_dir() {
         return Err(CliError::input(
             path,
-            "is a directory; the output must be a file path",
+            "is a directory; the output must be a file path (an NPY directory output of \
+             `apply`: end the path in `/`)",
         ));
     }
     if let Ok(meta) = fs::metadata(path) {
@@ -208,17 +209,20 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
 /// files (an earlier output, replaced as a whole); it is none of `inputs` and holds none
 /// of them. Runs before anything is read.
 pub fn check_dir_outputs(dir: &Path, ours: fn(&str) -> bool, inputs: &[&Path]) -> Result<()> {
-    check_dir_target(dir, ours)?;
-    let Ok(dir_meta) = fs::metadata(dir) else {
-        return Ok(());
-    };
+    if let Ok(dir_meta) = fs::metadata(dir) {
+        check_dir_inputs(dir, &dir_meta, inputs)?;
+    }
+    check_dir_target(dir, ours)
+}
+
+/// No input is `dir` (of metadata `dir_meta`) or a file in it.
+fn check_dir_inputs(dir: &Path, dir_meta: &fs::Metadata, inputs: &[&Path]) -> Result<()> {
     for input in inputs {
         let Ok(in_meta) = fs::metadata(input) else {
             continue;
         };
-        let inside =
-            fs::metadata(parent_dir(input)).is_ok_and(|p| same_file(&p, &dir_meta));
-        if same_file(&in_meta, &dir_meta) || inside {
+        let inside = fs::metadata(parent_dir(input)).is_ok_and(|p| same_file(&p, dir_meta));
+        if same_file(&in_meta, dir_meta) || inside {
             return Err(CliError::input(
                 dir,
                 format!(

@@ -33,29 +33,24 @@ fn is_npy_output_file(name: &str) -> bool {
     Head::NAMES.iter().any(|n| n.name == head)
 }
 
-/// The output's format: `--format`, else an NPY directory when `--output` ends in `/`
-/// or names an existing directory, else CSV.
+/// The output's format: `--format`, else an NPY directory when `--output` ends in `/`,
+/// else CSV.
 fn format_of(args: &ApplyArgs) -> Result<ApplyFormat> {
     let slash = args.output.as_os_str().as_encoded_bytes().ends_with(b"/");
-    let dir_like = slash || args.output.is_dir();
     match args.format {
         Some(ApplyFormat::Csv) if slash => Err(CliError::input(
             &args.output,
             "ends in `/`, a directory; --format csv writes a file",
         )),
         Some(f) => Ok(f),
-        None if dir_like => Ok(ApplyFormat::Npy),
+        None if slash => Ok(ApplyFormat::Npy),
         None => Ok(ApplyFormat::Csv),
     }
 }
 
 /// The heads to score, in column order: those of `--heads`, each of which the table
 /// (and its quantized section) must have, or every head it has.
-fn select_heads(
-    args: &ApplyArgs,
-    table_heads: &[Head],
-    available: &[Head],
-) -> Result<Vec<Head>> {
+fn select_heads(args: &ApplyArgs, table_heads: &[Head], available: &[Head]) -> Result<Vec<Head>> {
     let Some(asked) = &args.heads else {
         return Ok(available.to_vec());
     };
@@ -383,7 +378,10 @@ impl Spool {
         rows: u64,
         decode: impl Fn([u8; SIZE]) -> T,
     ) -> io::Result<()> {
-        let mut spool = self.file.into_inner().map_err(io::IntoInnerError::into_error)?;
+        let mut spool = self
+            .file
+            .into_inner()
+            .map_err(io::IntoInnerError::into_error)?;
         spool.seek(SeekFrom::Start(0))?;
         let mut spool = BufReader::with_capacity(1 << 16, spool);
         let shape: Vec<u64> = if self.width == 1 {
@@ -473,12 +471,19 @@ fn write_npy(s: &Scorer<'_>) -> Result<()> {
                 }
             }
             for (spool, &p) in pred_spools.iter_mut().zip(scored.preds) {
-                let p = if p < k { i32::try_from(p).unwrap_or(-1) } else { -1 };
+                let p = if p < k {
+                    i32::try_from(p).unwrap_or(-1)
+                } else {
+                    -1
+                };
                 spool.file.write_all(&p.to_le_bytes()).map_err(io_err)?;
             }
             if let (Some(spool), Some(mask)) = (&mut sets, scored.set) {
                 for c in 0..k {
-                    spool.file.write_all(&[u8::from(in_set(mask, c))]).map_err(io_err)?;
+                    spool
+                        .file
+                        .write_all(&[u8::from(in_set(mask, c))])
+                        .map_err(io_err)?;
                 }
             }
             Ok(())
@@ -488,13 +493,19 @@ fn write_npy(s: &Scorer<'_>) -> Result<()> {
             ids.get_ref().sync_all().map_err(io_err)?;
         }
         for spool in score_spools {
-            spool.finish(dir, rows, f32::from_le_bytes).map_err(io_err)?;
+            spool
+                .finish(dir, rows, f32::from_le_bytes)
+                .map_err(io_err)?;
         }
         for spool in pred_spools {
-            spool.finish(dir, rows, i32::from_le_bytes).map_err(io_err)?;
+            spool
+                .finish(dir, rows, i32::from_le_bytes)
+                .map_err(io_err)?;
         }
         if let Some(spool) = labels {
-            spool.finish(dir, rows, i32::from_le_bytes).map_err(io_err)?;
+            spool
+                .finish(dir, rows, i32::from_le_bytes)
+                .map_err(io_err)?;
         }
         if let Some(spool) = sets {
             spool.finish(dir, rows, |[b]: [u8; 1]| b).map_err(io_err)?;
