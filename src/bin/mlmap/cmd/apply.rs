@@ -62,7 +62,7 @@ fn select_heads(args: &ApplyArgs, table_heads: &[Head], available: &[Head]) -> R
             .join(", ")
     };
     for (i, h) in asked.iter().enumerate() {
-        if asked[..i].contains(h) {
+        if asked.iter().take(i).any(|a| a == h) {
             return Err(CliError::Input(format!(
                 "--heads names the {} head twice",
                 h.name()
