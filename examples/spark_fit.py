@@ -87,6 +87,7 @@ def read_rows(spark, path):
     fields = [T.StructField(c, T.StringType() if c in ("id", "label") else T.DoubleType())
               for c in header]
     df = spark.read.csv(str(path), header=True, schema=T.StructType(fields), mode="FAILFAST",
+                        escape="\"",
                         enforceSchema=False, ignoreLeadingWhiteSpace=True,
                         ignoreTrailingWhiteSpace=True)
     return df, classes, "objectness" in header
