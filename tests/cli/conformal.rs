@@ -71,6 +71,34 @@ fn conformal_apply_eval() {
             assert_eq!(r[at[c]], w[c].to_string(), "row {i} class {c}");
         }
     }
+    // The NPY output: the sets of the open head as a uint8 array, the same sets; none
+    // when the open head is not asked for.
+    let test = data("test");
+    let mut args = apply_args("sets.mlmap", &test, "npy/");
+    args.extend(["--heads", "ml,open"]);
+    ok(d, &args);
+    let bytes = std::fs::read(d.join("npy/sets.npy")).unwrap();
+    let npy = npyz::NpyFile::new(&bytes[..]).unwrap();
+    assert_eq!(npy.dtype().descr(), "'|u1'");
+    assert_eq!(npy.shape(), [records.len() as u64, 3]);
+    let set_bits: Vec<u8> = npy.into_vec().unwrap();
+    for (i, (w, m)) in sets.iter().zip(margins).enumerate() {
+        if m.as_f64().unwrap() < 1e-5 {
+            continue;
+        }
+        for c in 0..3 {
+            assert_eq!(
+                u64::from(set_bits[i * 3 + c]),
+                w[c].as_u64().unwrap(),
+                "row {i} class {c}"
+            );
+        }
+    }
+    let mut args = apply_args("sets.mlmap", &test, "nosets.csv");
+    args.extend(["--heads", "ml,map"]);
+    ok(d, &args);
+    let (header, _) = read_csv(&d.join("nosets.csv"));
+    assert!(!header.iter().any(|h| h.starts_with("set_")), "{header:?}");
     let ev = ok_json(
         d,
         &eval_args(

@@ -128,7 +128,12 @@ fn a_signal_during_apply_leaves_no_temporary_file() {
     write(d, "x.csv", SMALL);
     ok(d, &["fit", "--train", "x.csv", "-o", "t.mlmap"]);
     mkfifo(&d.join("in.fifo"));
-    for (signal, code) in [("TERM", 143), ("INT", 130), ("HUP", 129)] {
+    // A CSV file, then an NPY directory (a temporary directory).
+    let cases = [("TERM", 143), ("INT", 130), ("HUP", 129)]
+        .into_iter()
+        .map(|s| (s, "out.csv"))
+        .chain([(("TERM", 143), "out/"), (("INT", 130), "out/")]);
+    for ((signal, code), out) in cases {
         // The writer sends a large part of the input and keeps the FIFO open, so that
         // `apply` is in the middle of its output when the signal comes.
         let (release_tx, release_rx) = std::sync::mpsc::channel::<()>();
@@ -144,11 +149,7 @@ fn a_signal_during_apply_leaves_no_temporary_file() {
                 let _ = release_rx.recv();
             })
         };
-        let child = spawn(
-            d,
-            &apply_args("t.mlmap", "in.fifo", "out.csv"),
-            Stdio::null(),
-        );
+        let child = spawn(d, &apply_args("t.mlmap", "in.fifo", out), Stdio::null());
         let temporary = || {
             std::fs::read_dir(d)
                 .unwrap()
@@ -173,7 +174,7 @@ fn a_signal_during_apply_leaves_no_temporary_file() {
         writer.join().unwrap();
         assert_eq!(run.code, code, "SIG{signal}: {run:?}");
         assert_eq!(temporary(), Vec::<String>::new(), "SIG{signal}");
-        assert!(!d.join("out.csv").exists(), "SIG{signal}");
+        assert!(!d.join(out).exists(), "SIG{signal}, {out}");
     }
 }
 
@@ -211,6 +212,15 @@ fn outputs_honour_the_umask_and_the_mode_they_replace() {
         let out = format!("o{umask}.csv");
         assert_eq!(with_umask(d, umask, &apply_args(&table, "x.csv", &out)), 0);
         assert_eq!(mode(&d.join(&out)), want, "umask {umask}");
+        // An NPY directory: its files as any file, the directory with the search bits.
+        let npy = format!("n{umask}/");
+        assert_eq!(with_umask(d, umask, &apply_args(&table, "x.csv", &npy)), 0);
+        assert_eq!(mode(&d.join(&npy).join("ml.npy")), want, "umask {umask}");
+        assert_eq!(
+            mode(&d.join(&npy)),
+            want | (want & 0o444) >> 2,
+            "umask {umask}"
+        );
         let header = format!("h{umask}.h");
         assert_eq!(
             with_umask(d, umask, &["export-c", "--table", &table, "-o", &header]),

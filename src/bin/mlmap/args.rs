@@ -8,7 +8,7 @@ use mlmap::host::fit::{BayesParams, FitParams};
 use mlmap::host::metrics::Binning;
 use mlmap::host::names::Named;
 use mlmap::host::tune::Objective;
-use mlmap::{EdgeMode, UpperTail};
+use mlmap::{EdgeMode, Head, UpperTail};
 
 /// The parser of a flag taking one of the values of a [`Named`] set: the possible
 /// values, their descriptions and the parsing all come from the set's table.
@@ -39,7 +39,7 @@ pub enum Command {
     Merge(MergeArgs),
     /// Choose bin counts and lambdas of every head on validation data, and write the best table.
     Tune(TuneArgs),
-    /// Score every row of a file through the layer and write the scores as CSV.
+    /// Score every row of a file through the layer and write the scores (CSV or NPY).
     Apply(ApplyArgs),
     /// Compare sigmoid, softmax, temperature, ML, MAP and Bayes on labelled data.
     Eval(EvalArgs),
@@ -308,13 +308,33 @@ pub struct ApplyArgs {
     /// Rows to score (CSV file or NPY directory; labels optional).
     #[arg(long, value_name = "FILE")]
     pub input: PathBuf,
-    /// The CSV file to write.
-    #[arg(long, short, value_name = "FILE.csv")]
+    /// The output: a CSV file, or an NPY directory (when the path ends in `/`, or with
+    /// `--format npy`): `<head>.npy` (N x K float32 scores)
+    /// and `<head>_pred.npy` (int32 class indices) per head, `sets.npy`, `labels.npy`,
+    /// `ids.txt` and `classes.txt`. An existing NPY output is replaced as a whole.
+    #[arg(long, short, value_name = "FILE.csv|DIR/")]
     pub output: PathBuf,
+    /// The output's format (default: from `--output`, as above).
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub format: Option<ApplyFormat>,
+    /// Score and write only these heads (comma-separated), in the usual column order;
+    /// each must be one the table has. Default: every head the table has. Conformal sets
+    /// are written when the head they threshold is among them.
+    #[arg(long, value_delimiter = ',', value_parser = named::<Head>(), value_name = "HEAD,...")]
+    pub heads: Option<Vec<Head>>,
     /// The logits are quantized codes (CSV integers, NPY int8 or int16), scored through
     /// the table's quantized section (`mlmap quantize`).
     #[arg(long)]
     pub quantized: bool,
+}
+
+/// Output format of `apply`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ApplyFormat {
+    /// One CSV file.
+    Csv,
+    /// A directory of NPY arrays.
+    Npy,
 }
 
 /// Output format of `eval` and `inspect`.

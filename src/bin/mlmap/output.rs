@@ -19,7 +19,8 @@ pub fn check_target(path: &Path) -> Result<()> {
     if path.is_dir() {
         return Err(CliError::input(
             path,
-            "is a directory; the output must be a file path",
+            "is a directory; the output must be a file path (an NPY directory output of \
+             `apply`: end the path in `/`)",
         ));
     }
     if let Ok(meta) = fs::metadata(path) {
@@ -200,6 +201,131 @@ pub fn write_atomic(path: &Path, fill: impl FnOnce(&mut dyn Write) -> Result<()>
     registered
         .finish(|| tmp.persist(path))
         .map_err(|e| io_error(path, "cannot rename into place", &e.error))?;
+    Ok(())
+}
+
+/// Checks that `dir` can be an output directory that holds only files `ours` accepts:
+/// its parent exists; `dir` is nothing yet, or a directory holding nothing but such
+/// files (an earlier output, replaced as a whole); it is none of `inputs` and holds none
+/// of them. Runs before anything is read.
+pub fn check_dir_outputs(dir: &Path, ours: fn(&str) -> bool, inputs: &[&Path]) -> Result<()> {
+    if let Ok(dir_meta) = fs::metadata(dir) {
+        check_dir_inputs(dir, &dir_meta, inputs)?;
+    }
+    check_dir_target(dir, ours)
+}
+
+/// No input is `dir` (of metadata `dir_meta`) or a file in it.
+fn check_dir_inputs(dir: &Path, dir_meta: &fs::Metadata, inputs: &[&Path]) -> Result<()> {
+    for input in inputs {
+        let Ok(in_meta) = fs::metadata(input) else {
+            continue;
+        };
+        let inside = fs::metadata(parent_dir(input)).is_ok_and(|p| same_file(&p, dir_meta));
+        if same_file(&in_meta, dir_meta) || inside {
+            return Err(CliError::input(
+                dir,
+                format!(
+                    "holds or is the input {}; write the output elsewhere",
+                    input.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The checks of [`check_dir_outputs`] on `dir` itself.
+fn check_dir_target(dir: &Path, ours: fn(&str) -> bool) -> Result<()> {
+    if !parent_dir(dir).is_dir() {
+        return Err(CliError::input(
+            dir,
+            "the directory it would be created in does not exist",
+        ));
+    }
+    let Ok(meta) = fs::symlink_metadata(dir) else {
+        return Ok(());
+    };
+    if !meta.is_dir() {
+        return Err(CliError::input(
+            dir,
+            "is not a directory; an NPY output is a directory (a new one, or one written by \
+             an earlier run)",
+        ));
+    }
+    let entries = fs::read_dir(dir).map_err(|e| io_error(dir, "cannot list", &e))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| io_error(dir, "cannot list", &e))?;
+        let name = entry.file_name();
+        let is_file = entry.file_type().is_ok_and(|t| t.is_file());
+        if !(is_file && name.to_str().is_some_and(ours)) {
+            return Err(CliError::input(
+                dir,
+                format!(
+                    "holds {:?}, which this output does not write; give a new or empty \
+                     directory (an existing output is replaced as a whole)",
+                    name
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Writes the directory `dir` through `fill`, which writes its files into the directory
+/// it is given: a temporary directory `.mlmap-*.tmp` beside `dir`, renamed into place
+/// only when everything was written. An existing `dir` (see [`check_dir_outputs`]) is
+/// replaced as a whole and keeps its permission bits; a new one gets those the umask
+/// gives. On any error, and on SIGINT, SIGTERM or SIGHUP, the temporary directory is
+/// removed and `dir` is untouched.
+pub fn write_dir_atomic(
+    dir: &Path,
+    ours: fn(&str) -> bool,
+    fill: impl FnOnce(&Path) -> Result<()>,
+) -> Result<()> {
+    check_dir_target(dir, ours)?;
+    let parent = parent_dir(dir);
+    let existing = fs::metadata(dir).ok().filter(fs::Metadata::is_dir);
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".mlmap-").suffix(".tmp");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(fs::Permissions::from_mode(0o777));
+    }
+    let tmp = builder
+        .tempdir_in(parent)
+        .map_err(|e| io_error(dir, "cannot create a temporary directory", &e))?;
+    let registered = signals::Registered::new(tmp.path().to_path_buf());
+    fill(tmp.path())?;
+    if let Some(meta) = &existing {
+        fs::set_permissions(tmp.path(), meta.permissions())
+            .map_err(|e| io_error(dir, "cannot set the permissions", &e))?;
+    }
+    // The target may have changed while the output was computed.
+    check_dir_target(dir, ours)?;
+    // An existing output is first moved aside (over an empty temporary directory),
+    // then removed with it once the new one is in place.
+    let old = if fs::symlink_metadata(dir).is_ok() {
+        let old = builder
+            .tempdir_in(parent)
+            .map_err(|e| io_error(dir, "cannot create a temporary directory", &e))?;
+        fs::rename(dir, old.path()).map_err(|e| io_error(dir, "cannot replace", &e))?;
+        Some(old)
+    } else {
+        None
+    };
+    registered
+        .finish(|| fs::rename(tmp.path(), dir))
+        .map_err(|e| {
+            if let Some(old) = &old {
+                let _ = fs::rename(old.path(), dir);
+            }
+            io_error(dir, "cannot rename into place", &e)
+        })?;
+    // In place: no longer temporary.
+    let _ = tmp.keep();
+    drop(old);
     Ok(())
 }
 

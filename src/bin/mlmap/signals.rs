@@ -26,7 +26,10 @@ pub fn install() -> std::io::Result<()> {
                 // Held until the process ends: no file is renamed into place meanwhile.
                 let files = temporary();
                 for file in files.iter() {
-                    let _ = fs::remove_file(file);
+                    // A file, or the temporary directory of an NPY output.
+                    if fs::remove_file(file).is_err() {
+                        let _ = fs::remove_dir_all(file);
+                    }
                 }
                 std::process::exit(128 + signal);
             }
@@ -34,7 +37,8 @@ pub fn install() -> std::io::Result<()> {
     Ok(())
 }
 
-/// A temporary file registered for removal on a signal, for as long as this lives.
+/// A temporary file (or directory) registered for removal on a signal, for as long as
+/// this lives.
 pub struct Registered(PathBuf);
 
 impl Registered {
