@@ -82,6 +82,10 @@ pub use mlmap_core::{
 pub mod embedded;
 pub mod invariants;
 
+/// Decoding into storage the caller lends, of exactly the table's size (the C API's
+/// arena); see [`lent::LentTable`].
+pub use mlmap_core::lent;
+
 #[doc(hidden)]
 pub use mlmap_core::__embed;
 

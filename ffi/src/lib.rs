@@ -37,69 +37,55 @@ use core::ffi::c_char;
 use core::mem::{align_of, size_of};
 use core::ptr;
 
-use mlmap::{
-    decide, Bounded, BoundedTable, DecodeError, EdgeMode, Head, InferError, Libm, TableError,
-    TableView, UpperTail,
-};
+use mlmap::{decide, DecodeError, EdgeMode, Head, InferError, Libm, TableError, UpperTail};
 
 mod limits {
     include!(concat!(env!("OUT_DIR"), "/limits.rs"));
 }
+mod arena;
 mod conformal;
+mod decode;
+mod detail;
 mod monitor;
 pub use conformal::*;
+pub use decode::*;
+pub use detail::*;
 pub use monitor::*;
 
+use arena::{table_ref, View};
 use limits::{FAST_CLASSES, MAX_BINS, MAX_BINS_BAYES, MAX_CATEGORIES, MAX_CLASSES};
 
-/// The table type behind the opaque `mlmap_table_t`.
-type Inner = BoundedTable<
-    MAX_CLASSES,
-    MAX_BINS,
-    MAX_BINS,
-    MAX_BINS_BAYES,
-    MAX_CATEGORIES,
-    { mlmap::MAX_KNOTS },
-    1,
->;
-
-/// The view scoring runs on.
-type View<'a> = TableView<'a, Bounded<MAX_BINS>, Bounded<MAX_BINS>>;
-
-/// What `mlmap_table_t` holds: a tag saying that a table was decoded into it, and the
-/// table. All zeros (a zero-initialised `static`) is "no table".
-#[repr(C)]
-struct Storage {
-    tag: u64,
-    table: Inner,
-}
-
-/// Written into [`Storage::tag`] when a decode succeeds.
-const TAG: u64 = u64::from_le_bytes(*b"MLMPtab1");
-
-/// `MLMAP_TABLE_SIZE` of the header, in 8-byte words: an upper bound of the size of
-/// [`Storage`] for any maximum shape (the header computes the same formula, and the
-/// assertion below checks the bound at compile time). 1320 bytes of it are the fixed
-/// part: 256, room for a recalibration map of `MAX_KNOTS` knots per head (4 * 32 knots
-/// of 8 bytes, 4 lengths, padding) and the objectness feature's axis and flag; the
-/// Bayes head's categories hold `classes + 1` logits' terms (the K logits and the
-/// objectness feature).
-const fn table_words(classes: usize, bins: usize, bins_bayes: usize) -> usize {
-    (1320 + classes * (160 + 8 * bins) + (classes + 1) * (16 + 4 * (classes + 1) * bins_bayes))
+/// `MLMAP_TABLE_SIZE` of the header: bytes of a `mlmap_table_t`, an arena with room
+/// for any table of the build's maximum shape (`classes`, `bins` in the ML and MAP heads,
+/// `bins_bayes` per logit in the Bayes head, 0 for none) with every part at its largest:
+/// a map of 32 knots per head and the objectness feature. The header computes the same
+/// formula; the assertion below checks that it bounds the arena's layout.
+#[cfg_attr(not(test), allow(dead_code))]
+const fn table_bytes(classes: usize, bins: usize, bins_bayes: usize) -> usize {
+    let p = size_of::<usize>();
+    (1136
+        + 32 * p
+        + classes * (112 + 8 * p + 8 * bins)
+        + (classes + 1) * (12 + 4 * (classes + 1) * bins_bayes))
         .div_ceil(8)
+        * 8
 }
 
-const _: () =
-    assert!(size_of::<Storage>() <= 8 * table_words(MAX_CLASSES, MAX_BINS, MAX_BINS_BAYES));
-const _: () = assert!(align_of::<Storage>() <= MLMAP_TABLE_ALIGN);
+/// The shape of the largest table a `mlmap_table_t` holds.
+const MAX_SHAPE: mlmap::lent::StorageShape = mlmap::lent::StorageShape {
+    classes: MAX_CLASSES,
+    bins_ml: MAX_BINS,
+    bins_map: MAX_BINS,
+    bins_bayes: MAX_BINS_BAYES,
+    categories: MAX_CATEGORIES,
+    knots: [mlmap::MAX_KNOTS; 4],
+    objectness: MAX_BINS_BAYES > 0,
+};
 
-/// An all-zero table is a valid, empty table: const evaluation rejects this item if a
-/// zero byte pattern were not a valid value (an enum or a reference field), so
-/// zeroing a `mlmap_table_t` before decoding into it is sound.
-#[allow(dead_code)]
-const ZEROED_TABLE_IS_VALID: BoundedTable<2, 1, 1, 1, 3> =
-    // SAFETY: checked by const evaluation, see above.
-    unsafe { core::mem::zeroed() };
+/// Bytes of a `mlmap_table_t` the library uses: the arena of [`MAX_SHAPE`].
+fn max_table_bytes() -> usize {
+    arena::layout(&MAX_SHAPE).map_or(usize::MAX, |l| l.size)
+}
 
 /// Alignment of `mlmap_table_t` in bytes.
 pub const MLMAP_TABLE_ALIGN: usize = 8;
@@ -108,8 +94,9 @@ pub const MLMAP_TABLE_ALIGN: usize = 8;
 pub const MLMAP_NAME_MAX: usize = 31;
 const _: () = assert!(MLMAP_NAME_MAX == mlmap::NAME_MAX);
 
-/// Opaque storage of one table (defined in the header, sized by the `MLMAP_MAX_*`
-/// macros). Only the library reads or writes its contents.
+/// A decoded table: an arena (a `mlmap_table_t`, or exactly the bytes the table needs,
+/// see `mlmap_table_init`), used through a pointer to it. Only the library reads or
+/// writes its contents.
 pub struct mlmap_table_t {
     _opaque: [u64; 0],
 }
@@ -199,13 +186,16 @@ pub enum mlmap_status_t {
     /// The conformal storage holds no conformal handle (mlmap_conformal_init() did not
     /// succeed on it).
     MLMAP_ERR_NO_CONFORMAL = 29,
+    /// The table storage was copied or moved after its decode: it holds pointers into
+    /// itself, so only the storage decoded into is a table (decode again instead).
+    MLMAP_ERR_MOVED = 30,
 }
 
 use mlmap_status_t::*;
 
 /// Statuses in code order (tests and `mlmap_status_str`).
 #[doc(hidden)]
-pub const ALL_STATUSES: [mlmap_status_t; 30] = [
+pub const ALL_STATUSES: [mlmap_status_t; 31] = [
     MLMAP_OK,
     MLMAP_ERR_NULL_POINTER,
     MLMAP_ERR_MISALIGNED,
@@ -236,6 +226,7 @@ pub const ALL_STATUSES: [mlmap_status_t; 30] = [
     MLMAP_ERR_NO_SECTION,
     MLMAP_ERR_INVALID_SECTION,
     MLMAP_ERR_NO_CONFORMAL,
+    MLMAP_ERR_MOVED,
 ];
 
 impl From<DecodeError> for mlmap_status_t {
@@ -337,33 +328,22 @@ fn check_ptr<T>(p: *const T) -> Result<(), mlmap_status_t> {
     }
 }
 
-/// The decoded table in `table`.
+/// The view of a decoded table.
 ///
 /// # Safety
 ///
-/// `table` is NULL or points to a `mlmap_table_t` that is zeroed or was passed to
-/// [`mlmap_table_decode`] (with a large enough size, which the tag proves).
+/// `table` is NULL or points to an arena that is zeroed or was passed to a decode.
 #[inline(always)]
-unsafe fn table_ref<'a>(table: *const mlmap_table_t) -> Result<&'a Inner, mlmap_status_t> {
-    let storage = table.cast::<Storage>();
-    check_ptr(storage)?;
-    // SAFETY: non-NULL and aligned; the caller's storage is at least the tag's size.
-    let tag = unsafe { ptr::addr_of!((*storage).tag).read() };
-    if tag != TAG {
-        return Err(MLMAP_ERR_NO_TABLE);
-    }
-    // SAFETY: the tag is only written after a successful decode into storage of at
-    // least `size_of::<Storage>()` bytes, which then holds a valid `Storage`.
-    Ok(unsafe { &(*storage).table })
+unsafe fn view<'a>(table: *const mlmap_table_t) -> Result<&'a View<'a>, mlmap_status_t> {
+    // SAFETY: forwarded contract.
+    unsafe { table_ref(table) }.map(|(v, _)| v)
 }
 
-/// The view of a decoded table.
+/// Bytes of the arena at `table` that its table uses (the tag's 8 when it holds none).
 #[inline(always)]
-unsafe fn view<'a>(table: *const mlmap_table_t) -> Result<View<'a>, mlmap_status_t> {
-    // SAFETY: forwarded contract.
-    unsafe { table_ref(table) }?
-        .view()
-        .ok_or(MLMAP_ERR_NO_TABLE)
+fn table_len(table: *const mlmap_table_t) -> usize {
+    // SAFETY: every caller passes a table pointer it was given, checked by `view` first.
+    unsafe { table_ref(table) }.map_or(8, |(_, used)| used)
 }
 
 /// Writes `value` through an output pointer that has no table storage to overlap.
@@ -383,7 +363,7 @@ fn outside_table<T>(
     len: usize,
     table: *const mlmap_table_t,
 ) -> Result<(), mlmap_status_t> {
-    if overlap(out as usize, len, table as usize, size_of::<Storage>()) {
+    if overlap(out as usize, len, table as usize, table_len(table)) {
         Err(MLMAP_ERR_OVERLAP)
     } else {
         Ok(())
@@ -430,89 +410,10 @@ pub unsafe extern "C" fn mlmap_limits(limits: *mut mlmap_limits_t) -> mlmap_stat
         max_classes: MAX_CLASSES,
         max_bins: MAX_BINS,
         max_bins_bayes: MAX_BINS_BAYES,
-        table_size: size_of::<Storage>(),
+        table_size: max_table_bytes(),
     };
     // SAFETY: the caller passes a pointer to a `mlmap_limits_t` or NULL.
     status(unsafe { put(limits, value) })
-}
-
-/// Decodes and validates a table (a `.mlmap` file's bytes) into `table`.
-///
-/// Checks, in order: the magic, the CRC-32, the format version, the shape against the
-/// library's maximum, the body's syntax and every table invariant; the same checks,
-/// with the same outcome, as the Rust `Table::from_bytes`. Any table the storage held
-/// before is discarded first: on failure the storage holds no table, and every
-/// function given it returns `MLMAP_ERR_NO_TABLE`. The bytes are not used after the
-/// call returns.
-///
-/// Work: zeroes the first `mlmap_limits().table_size` bytes of the storage (the rest of
-/// the `table_size` bytes is never read or written), computes the CRC-32 over the
-/// input, then parses it once into the storage and checks the invariants: time linear
-/// in `mlmap_limits().table_size` plus `len`; a few hundred bytes of stack.
-///
-/// @param[out] table Storage for the table: a `mlmap_table_t`, aligned to
-///   `MLMAP_TABLE_ALIGN` (a `static mlmap_table_t` is).
-/// @param table_size The size of the storage in bytes (`sizeof` it): at least
-///   `mlmap_limits().table_size` (`MLMAP_ERR_STORAGE_TOO_SMALL`), at most
-///   `PTRDIFF_MAX` and not past the end of the address space (`MLMAP_ERR_TOO_LARGE`).
-/// @param bytes The table's bytes; must not overlap the `table_size` bytes of the
-///   storage (`MLMAP_ERR_OVERLAP`).
-/// @param len Number of bytes, at most `PTRDIFF_MAX` (`MLMAP_ERR_TOO_LARGE`).
-/// @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
-///   `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, and
-///   each decode error: `MLMAP_ERR_TRUNCATED`, `MLMAP_ERR_NOT_A_TABLE`,
-///   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`,
-///   `MLMAP_ERR_SHAPE_TOO_LARGE`, `MLMAP_ERR_BAYES_SHAPE_TOO_LARGE`,
-///   `MLMAP_ERR_MALFORMED`, `MLMAP_ERR_INVALID_TABLE`.
-#[no_mangle]
-pub unsafe extern "C" fn mlmap_table_decode(
-    table: *mut mlmap_table_t,
-    table_size: usize,
-    bytes: *const u8,
-    len: usize,
-) -> mlmap_status_t {
-    // SAFETY: forwarded contract.
-    status(unsafe { decode(table, table_size, bytes, len) })
-}
-
-unsafe fn decode(
-    table: *mut mlmap_table_t,
-    table_size: usize,
-    bytes: *const u8,
-    len: usize,
-) -> Result<(), mlmap_status_t> {
-    let storage = table.cast::<Storage>();
-    check_ptr(storage)?;
-    check_ptr(bytes)?;
-    let need = size_of::<Storage>();
-    if table_size < need {
-        return Err(MLMAP_ERR_STORAGE_TOO_SMALL);
-    }
-    // Both lengths must describe memory: at most `PTRDIFF_MAX` bytes, not past the end
-    // of the address space.
-    let (s, b) = (storage as usize, bytes as usize);
-    let describes_memory =
-        |at: usize, n: usize| n <= isize::MAX as usize && at.checked_add(n).is_some();
-    if !describes_memory(s, table_size) || !describes_memory(b, len) {
-        return Err(MLMAP_ERR_TOO_LARGE);
-    }
-    // The bytes must lie outside the whole storage the caller declared.
-    if overlap(s, table_size, b, len) {
-        return Err(MLMAP_ERR_OVERLAP);
-    }
-    // SAFETY: `storage` is non-NULL, aligned and points to `table_size >= need` bytes
-    // the caller owns, of which only the first `need` are written; all zeros is a valid
-    // `Storage` (tag 0: no table, and an empty table, see `ZEROED_TABLE_IS_VALID`).
-    let storage = unsafe {
-        ptr::write_bytes(storage, 0, 1);
-        &mut *storage
-    };
-    // SAFETY: `bytes` is non-NULL and the caller promises `len` readable bytes, which
-    // do not overlap the storage (checked above).
-    let bytes = unsafe { core::slice::from_raw_parts(bytes, len) };
-    storage.table.decode(bytes)?;
-    storage.tag = TAG;
-    Ok(())
 }
 
 /// Gives the number of classes K of a decoded table.
@@ -729,7 +630,7 @@ fn score_categories(
     objectness: f32,
     out: &mut [f32],
 ) -> Result<(), InferError> {
-    let mut cats = [0.0f32; MAX_CATEGORIES];
+    let mut cats = [0.0f32; MAX_CLASSES + 1];
     v.score_into(head, x, objectness, out, &mut cats)
 }
 
@@ -794,7 +695,7 @@ unsafe fn detection(
         return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
     }
     let bytes = k * size_of::<f32>();
-    if overlap(out as usize, bytes, table as usize, size_of::<Storage>()) {
+    if overlap(out as usize, bytes, table as usize, table_len(table)) {
         return Err(MLMAP_ERR_OVERLAP);
     }
     if !overlap(out as usize, bytes, logits as usize, bytes) {
@@ -1462,6 +1363,7 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         27 => c"input holds no section of this kind (monitor: magic MLMW; conformal: magic MLMS)",
         28 => c"a section breaks its format or belongs to another table",
         29 => c"the conformal storage holds no conformal handle",
+        30 => c"the table storage was copied or moved after its decode (decode it again)",
         _ => c"unknown mlmap status",
     };
     s.as_ptr()
@@ -1477,4 +1379,27 @@ fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
     }
     // SAFETY: never executed; a reachable call fails the link.
     unsafe { mlmap_panic_path_reachable() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `MLMAP_TABLE_SIZE` bounds the arena of the largest table of the build's shape,
+    /// and of the default build's.
+    #[test]
+    fn the_table_type_holds_the_largest_arena() {
+        let need = max_table_bytes();
+        assert!(need <= table_bytes(MAX_CLASSES, MAX_BINS, MAX_BINS_BAYES));
+        let default = mlmap::lent::StorageShape {
+            classes: 16,
+            bins_ml: 64,
+            bins_map: 64,
+            bins_bayes: 64,
+            categories: 17,
+            knots: [32; 4],
+            objectness: true,
+        };
+        assert!(arena::layout(&default).unwrap().size <= table_bytes(16, 64, 64));
+    }
 }
