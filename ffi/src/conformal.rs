@@ -112,7 +112,7 @@ unsafe fn init(
     // SAFETY: `header` is non-NULL, aligned, and `need` writable bytes; the tag is
     // cleared first so that a failure leaves no handle.
     unsafe { ptr::addr_of_mut!((*header).tag).write(0) };
-    let spec = ConformalSpec::from_bytes(section, &view)?;
+    let spec = ConformalSpec::from_bytes(section, view)?;
     // SAFETY: as above.
     unsafe {
         ptr::addr_of_mut!((*header).spec).write(spec);
@@ -238,7 +238,7 @@ unsafe fn set(
     let out = out.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
     let mut scratch = [0.0f32; MAX_CATEGORIES];
     let mut m = [0u32; MAX_WORDS];
-    let n = spec.score_set(&view, x, objectness, out, &mut scratch, &mut m)?;
+    let n = spec.score_set(view, x, objectness, out, &mut scratch, &mut m)?;
     let m = m.get(..words).ok_or(MLMAP_ERR_LENGTH)?;
     // SAFETY: outputs checked above: non-NULL, aligned, large enough, disjoint.
     unsafe {

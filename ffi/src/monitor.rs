@@ -172,7 +172,7 @@ unsafe fn init(
     // SAFETY: `header` is non-NULL, aligned, and `need >= size_of::<Header>()` writable
     // bytes; the tag is cleared before anything else so a failure leaves no monitor.
     unsafe { ptr::addr_of_mut!((*header).tag).write(0) };
-    let spec = MonitorSpec::from_bytes(section, &view)?;
+    let spec = MonitorSpec::from_bytes(section, view)?;
     // SAFETY: as above; the counts follow the header inside the `need` bytes.
     unsafe {
         ptr::addr_of_mut!((*header).spec).write(spec);
