@@ -203,7 +203,10 @@ pub unsafe extern "C" fn mlmap_table_init(
             return s;
         }
         let t = table as usize;
-        if overlap(t, size_of::<usize>(), arena as usize, arena_size)
+        // (An arena size that cannot describe memory is refused by the decode.)
+        if describes_memory(arena as usize, arena_size)
+            && describes_memory(bytes as usize, len)
+            && overlap(t, size_of::<usize>(), arena as usize, arena_size)
             || overlap(t, size_of::<usize>(), bytes as usize, len)
         {
             return MLMAP_ERR_OVERLAP;
