@@ -4,7 +4,7 @@
 //!
 //! [`StorageShape::of`] reads how many of each item a table needs (from its header and,
 //! for a version-4 table, the lengths of its maps and of its objectness feature);
-//! [`LentTable`] lends that storage to the one decoder ([`Slots`]), which fills and
+//! [`LentTable`] lends that storage to the one decoder (`Slots`), which fills and
 //! validates it, and the result is a [`TableView`], the one implementation of scoring.
 //! The same bytes give the same result as `DynTable::from_bytes`, error included.
 
