@@ -102,20 +102,31 @@
 #define MLMAP_MAX_BINS_BAYES 64
 #endif
 
-/** Bytes of ::mlmap_table_t: an upper bound of what the library uses. */
+/** Bytes of ::mlmap_table_t: an upper bound of the arena of the largest table of the
+ * build's shape (see mlmap_limits() for what the library uses). */
 #define MLMAP_TABLE_SIZE \
-  ((((size_t)1320 + (size_t)MLMAP_MAX_CLASSES * (160 + 8 * (size_t)MLMAP_MAX_BINS) + \
-     ((size_t)MLMAP_MAX_CLASSES + 1) * (16 + 4 * ((size_t)MLMAP_MAX_CLASSES + 1) * \
-     (size_t)MLMAP_MAX_BINS_BAYES)) + 7) / 8 * 8)
+  (((size_t)1136 + 32 * sizeof(void *) + \
+    (size_t)MLMAP_MAX_CLASSES * (112 + 8 * sizeof(void *) + 8 * (size_t)MLMAP_MAX_BINS) + \
+    ((size_t)MLMAP_MAX_CLASSES + 1) * (12 + 4 * ((size_t)MLMAP_MAX_CLASSES + 1) * \
+    (size_t)MLMAP_MAX_BINS_BAYES) + 7) / 8 * 8)
 
 /**
- * Storage of one decoded table, `MLMAP_TABLE_SIZE` bytes aligned to
- * `MLMAP_TABLE_ALIGN`: put it in a `static` (zero-initialised: "no table"). Opaque:
- * only the library reads or writes it; it holds no pointer and may be copied.
+ * Storage of one table of up to the build's maximum shape, `MLMAP_TABLE_SIZE` bytes
+ * aligned to `MLMAP_TABLE_ALIGN` (about 87 KB in the default build): for
+ * mlmap_table_decode(). Prefer an arena of exactly the table's size and
+ * mlmap_table_init() (see `MLMAP_ARENA_LAYOUT`). Zero-initialised it holds no table;
+ * once decoded it holds pointers into itself: never copy or move it.
  */
 typedef struct mlmap_table {
   MLMAP_ALIGN8 uint64_t opaque_[MLMAP_TABLE_SIZE / 8];
 } mlmap_table_t;
+
+/**
+ * The version of the arena layout the library carves (mlmap_table_init()): `mlmap
+ * export-c` writes an arena size for one layout and checks at compile time that the
+ * header it is compiled with has the same.
+ */
+#define MLMAP_ARENA_LAYOUT 1
 /** @} */
 
 /**
@@ -314,12 +325,110 @@ enum mlmap_status_t
    * succeed on it).
    */
   MLMAP_ERR_NO_CONFORMAL = 29,
+  /**
+   * The table storage was copied or moved after its decode: it holds pointers into
+   * itself, so only the storage decoded into is a table (decode again instead).
+   */
+  MLMAP_ERR_MOVED = 30,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
 typedef enum mlmap_status_t mlmap_status_t;
 #else
 typedef int32_t mlmap_status_t;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/**
+ * What part of a table a decode failure is about (`mlmap_error_t.field`).
+ *
+ * Values are stable; `mlmap_field_str()` names each.
+ */
+enum mlmap_field_t
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : int32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  /**
+   * No field: success, or a failure of the whole input (magic, CRC, version, a body
+   * that does not parse: the parser reports no position) or of an argument.
+   */
+  MLMAP_FIELD_NONE = 0,
+  /**
+   * A histogram's edges (`head`, `class_index`).
+   */
+  MLMAP_FIELD_EDGES = 1,
+  /**
+   * A histogram's frequencies (`head`, `class_index`).
+   */
+  MLMAP_FIELD_FREQUENCIES = 2,
+  /**
+   * A histogram's bin count (`head`, `class_index`).
+   */
+  MLMAP_FIELD_BIN_COUNT = 3,
+  /**
+   * A prior's mean (`class_index`).
+   */
+  MLMAP_FIELD_MEAN = 4,
+  /**
+   * A prior's variance (`class_index`).
+   */
+  MLMAP_FIELD_VARIANCE = 5,
+  /**
+   * A head's smoothing lambda (`head`).
+   */
+  MLMAP_FIELD_LAMBDA = 6,
+  /**
+   * A class name breaks the naming rule (`class_index`).
+   */
+  MLMAP_FIELD_NAME = 7,
+  /**
+   * A class name repeats an earlier one (`class_index`).
+   */
+  MLMAP_FIELD_DUPLICATE_NAME = 8,
+  /**
+   * The number of classes.
+   */
+  MLMAP_FIELD_CLASS_COUNT = 9,
+  /**
+   * A Bayes category without training rows (`class_index` is the category).
+   */
+  MLMAP_FIELD_CATEGORY_ROWS = 10,
+  /**
+   * The Bayes head's shape (categories, sequence lengths, or above the build's
+   * maximum).
+   */
+  MLMAP_FIELD_BAYES_SHAPE = 11,
+  /**
+   * The open head's temperature.
+   */
+  MLMAP_FIELD_TEMPERATURE = 12,
+  /**
+   * The open head's epsilon.
+   */
+  MLMAP_FIELD_EPSILON = 13,
+  /**
+   * A recalibration map (`head`).
+   */
+  MLMAP_FIELD_MAP = 14,
+  /**
+   * The shape (classes, bins) is above what the storage or the build holds.
+   */
+  MLMAP_FIELD_SHAPE = 15,
+  /**
+   * The objectness feature.
+   */
+  MLMAP_FIELD_OBJECTNESS = 16,
+  /**
+   * The storage is smaller than the table needs (`needed`).
+   */
+  MLMAP_FIELD_STORAGE = 17,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum mlmap_field_t mlmap_field_t;
+#else
+typedef int32_t mlmap_field_t;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
@@ -409,6 +518,33 @@ typedef struct {
 } mlmap_settings_t;
 
 /**
+ * The details of a status: which field, head and class a decode failure is about.
+ */
+typedef struct {
+  /**
+   * The status the call returned.
+   */
+  mlmap_status_t status;
+  /**
+   * The field the failure is about (`MLMAP_FIELD_NONE` for none).
+   */
+  mlmap_field_t field;
+  /**
+   * The head: 0 ML, 1 MAP, 2 Bayes, 3 open; -1 for none.
+   */
+  int32_t head;
+  /**
+   * The class (for `MLMAP_FIELD_CATEGORY_ROWS` the Bayes category); -1 for none.
+   */
+  int32_t class_index;
+  /**
+   * Bytes of arena the table needs, when known (0 otherwise): set on success and
+   * with `MLMAP_ERR_STORAGE_TOO_SMALL`.
+   */
+  size_t needed;
+} mlmap_error_t;
+
+/**
  * The metrics of one window (docs/DESIGN.md section 7).
  */
 typedef struct {
@@ -468,41 +604,6 @@ extern "C" {
  * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`.
  */
 mlmap_status_t mlmap_limits(mlmap_limits_t *limits);
-
-/**
- * Decodes and validates a table (a `.mlmap` file's bytes) into `table`.
- *
- * Checks, in order: the magic, the CRC-32, the format version, the shape against the
- * library's maximum, the body's syntax and every table invariant; the same checks,
- * with the same outcome, as the Rust `Table::from_bytes`. Any table the storage held
- * before is discarded first: on failure the storage holds no table, and every
- * function given it returns `MLMAP_ERR_NO_TABLE`. The bytes are not used after the
- * call returns.
- *
- * Work: zeroes the first `mlmap_limits().table_size` bytes of the storage (the rest of
- * the `table_size` bytes is never read or written), computes the CRC-32 over the
- * input, then parses it once into the storage and checks the invariants: time linear
- * in `mlmap_limits().table_size` plus `len`; a few hundred bytes of stack.
- *
- * @param[out] table Storage for the table: a `mlmap_table_t`, aligned to
- *   `MLMAP_TABLE_ALIGN` (a `static mlmap_table_t` is).
- * @param table_size The size of the storage in bytes (`sizeof` it): at least
- *   `mlmap_limits().table_size` (`MLMAP_ERR_STORAGE_TOO_SMALL`), at most
- *   `PTRDIFF_MAX` and not past the end of the address space (`MLMAP_ERR_TOO_LARGE`).
- * @param bytes The table's bytes; must not overlap the `table_size` bytes of the
- *   storage (`MLMAP_ERR_OVERLAP`).
- * @param len Number of bytes, at most `PTRDIFF_MAX` (`MLMAP_ERR_TOO_LARGE`).
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, and
- *   each decode error: `MLMAP_ERR_TRUNCATED`, `MLMAP_ERR_NOT_A_TABLE`,
- *   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`,
- *   `MLMAP_ERR_SHAPE_TOO_LARGE`, `MLMAP_ERR_BAYES_SHAPE_TOO_LARGE`,
- *   `MLMAP_ERR_MALFORMED`, `MLMAP_ERR_INVALID_TABLE`.
- */
-mlmap_status_t mlmap_table_decode(mlmap_table_t *table,
-                                  size_t table_size,
-                                  const uint8_t *bytes,
-                                  size_t len);
 
 /**
  * Gives the number of classes K of a decoded table.
@@ -572,6 +673,358 @@ mlmap_status_t mlmap_class_index(const mlmap_table_t *table,
                                  const char *name,
                                  size_t name_len,
                                  size_t *class_index);
+
+/**
+ * The library's version, `"MAJOR.MINOR.PATCH"` (a static NUL-terminated string):
+ * equal to the header's `MLMAP_VERSION_STRING` when header and library come from one
+ * build.
+ */
+const char *mlmap_version(void);
+
+/**
+ * Initialises a conformal handle in `conformal` for `table` from the conformal section
+ * in `bytes` (a table file with the section, as written by `mlmap conformal`, or the
+ * section alone).
+ *
+ * Checks the section as the Rust `ConformalSpec::from_bytes` does: the magic, the CRC,
+ * the version, that the table has the section's head, K, the table's CRC when the
+ * table precedes the section, alpha, and every threshold against its calibration rows.
+ *
+ * Lifetime: the handle keeps pointers into `table` and `bytes`: both must stay in place
+ * and unchanged while it is used. On failure the storage holds no handle.
+ *
+ * @param[out] conformal Storage of `MLMAP_CONFORMAL_SIZE` bytes aligned to
+ *   `MLMAP_CONFORMAL_ALIGN`.
+ * @param conformal_size Its size in bytes (`MLMAP_ERR_STORAGE_TOO_SMALL` when too small).
+ * @param table A decoded table.
+ * @param bytes The bytes holding the conformal section; they must not overlap the handle.
+ * @param len Number of bytes.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_TOO_LARGE`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NO_SECTION`, `MLMAP_ERR_CORRUPTED`,
+ *   `MLMAP_ERR_UNSUPPORTED_VERSION`, `MLMAP_ERR_NO_BAYES_HEAD`, `MLMAP_ERR_NO_OPEN_HEAD`
+ *   (the section's head is not in the table), `MLMAP_ERR_INVALID_SECTION`.
+ */
+mlmap_status_t mlmap_conformal_init(void *conformal,
+                                    size_t conformal_size,
+                                    const mlmap_table_t *table,
+                                    const uint8_t *bytes,
+                                    size_t len);
+
+/**
+ * Scores one detection with the section's head (the library's default backend for it,
+ * as mlmap_score() and the Rust `Table` methods) into `scores` and writes its conformal
+ * set into `mask`: bit `c % 32` of `mask[c / 32]` is 1 when class `c` is in the set
+ * (its score at or above its threshold). An empty set with the open head, or a table
+ * with a background category, means "not a known object".
+ *
+ * Work: the head's scoring, then K comparisons. No allocation, bounded time.
+ *
+ * @param conformal A handle from mlmap_conformal_init().
+ * @param logits K logits; they may lie anywhere (copied first).
+ * @param n_logits K (`MLMAP_ERR_LENGTH` otherwise).
+ * @param objectness In [0, 1] (`MLMAP_ERR_OBJECTNESS`).
+ * @param[out] scores K floats: the head's scores.
+ * @param scores_len Floats at `scores` (`MLMAP_ERR_BUFFER_TOO_SMALL` below K).
+ * @param[out] mask `(K + 31) / 32` words: the set.
+ * @param mask_len Words at `mask` (`MLMAP_ERR_BUFFER_TOO_SMALL` below `(K + 31) / 32`).
+ * @param[out] size The number of classes in the set.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_CONFORMAL`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS` (nothing is
+ *   written then).
+ */
+mlmap_status_t mlmap_conformal_set(const void *conformal,
+                                   const float *logits,
+                                   size_t n_logits,
+                                   float objectness,
+                                   float *scores,
+                                   size_t scores_len,
+                                   uint32_t *mask,
+                                   size_t mask_len,
+                                   uint32_t *size);
+
+/**
+ * The handle's level, head and thresholds.
+ *
+ * @param conformal A handle from mlmap_conformal_init().
+ * @param[out] alpha Receives alpha.
+ * @param[out] head Receives the head: 0 ML, 1 MAP, 2 Bayes, 3 open.
+ * @param[out] thresholds Receives K thresholds (`-INFINITY`: the class is in every set).
+ * @param thresholds_len Floats at `thresholds` (`MLMAP_ERR_BUFFER_TOO_SMALL` below K).
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_CONFORMAL`, `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_conformal_params(const void *conformal,
+                                      float *alpha,
+                                      uint32_t *head,
+                                      float *thresholds,
+                                      size_t thresholds_len);
+
+/**
+ * The tie-safe decision (docs/DESIGN.md §1.7): the index of the largest score;
+ * among equal largest scores, the one with the largest logit; among those, the
+ * lowest index. Use it instead of a plain argmax: a detection that every histogram
+ * calls "I don't know" gets equal scores, and the logits then keep the detector's
+ * ranking.
+ *
+ * A NaN anywhere in the scores (`MLMAP_ERR_NAN_SCORE`) or in the logits
+ * (`MLMAP_ERR_NAN_LOGIT`) is an error, not a decision (docs/DESIGN.md §5.1); `±inf`
+ * is compared as any other value.
+ *
+ * @param scores The K scores of one detection.
+ * @param logits The same detection's K logits.
+ * @param k Number of scores and logits, at least 1.
+ * @param[out] class_index Receives the decided class; may overlap the inputs (they
+ *   are read whole first).
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NAN_SCORE`,
+ *   `MLMAP_ERR_NAN_LOGIT`.
+ */
+mlmap_status_t mlmap_decide(const float *scores,
+                            const float *logits,
+                            size_t k,
+                            size_t *class_index);
+
+/**
+ * Decides a batch: `mlmap_decide` on each of `n` rows of K scores and K logits,
+ * row-major (row `r` at `scores + r * k` and `logits + r * k`), the class of row `r`
+ * into `classes[r]`. Stops at the first row with a NaN score or logit; the rows before
+ * it are written.
+ *
+ * @param scores `n * k` scores.
+ * @param logits `n * k` logits.
+ * @param n Number of rows (0: nothing to do).
+ * @param k Classes per row, at least 1.
+ * @param[out] classes Receives `n` class indexes; must not overlap the inputs.
+ * @param classes_len Entries available at `classes`, at least `n`.
+ * @param[out] done Receives the number of rows decided; may be NULL.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_TOO_LARGE`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_SCORE`, `MLMAP_ERR_NAN_LOGIT` (row `*done`).
+ */
+mlmap_status_t mlmap_decide_batch(const float *scores,
+                                  const float *logits,
+                                  size_t n,
+                                  size_t k,
+                                  size_t *classes,
+                                  size_t classes_len,
+                                  size_t *done);
+
+/**
+ * Decodes and validates a table (a `.mlmap` file's bytes) into `table`, a
+ * `mlmap_table_t` (room for any table of the build's maximum shape).
+ *
+ * Prefer mlmap_table_init(), which takes an arena of exactly the table's size (a
+ * `mlmap_table_t` is about 87 KB in the default build, whatever the table); this
+ * function is kept for programs written against it and decodes into the same layout.
+ *
+ * Checks, in order: the magic, the CRC-32, the format version, the shape against the
+ * library's maximum, the body's syntax and every table invariant; the same checks,
+ * with the same outcome, as the Rust `Table::from_bytes`. Any table the storage held
+ * before is discarded first: on failure the storage holds no table, and every
+ * function given it returns `MLMAP_ERR_NO_TABLE`. The bytes are not used after the
+ * call returns.
+ *
+ * The storage holds pointers into itself once decoded: do not copy or move it (a copy
+ * is refused with `MLMAP_ERR_MOVED`; decode again instead).
+ *
+ * Work: computes the CRC-32 over the input, measures the table (for a format-4 table,
+ * one parse that stores nothing), then parses it once into the storage and checks the
+ * invariants: time linear in `len` and in the table's size.
+ *
+ * @param[out] table Storage for the table: a `mlmap_table_t`, aligned to
+ *   `MLMAP_TABLE_ALIGN` (a `static mlmap_table_t` is).
+ * @param table_size The size of the storage in bytes (`sizeof` it): at least
+ *   `mlmap_limits().table_size` (`MLMAP_ERR_STORAGE_TOO_SMALL`), at most
+ *   `PTRDIFF_MAX` and not past the end of the address space (`MLMAP_ERR_TOO_LARGE`).
+ * @param bytes The table's bytes; must not overlap the `table_size` bytes of the
+ *   storage (`MLMAP_ERR_OVERLAP`).
+ * @param len Number of bytes, at most `PTRDIFF_MAX` (`MLMAP_ERR_TOO_LARGE`).
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, and
+ *   each decode error: `MLMAP_ERR_TRUNCATED`, `MLMAP_ERR_NOT_A_TABLE`,
+ *   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`,
+ *   `MLMAP_ERR_SHAPE_TOO_LARGE`, `MLMAP_ERR_BAYES_SHAPE_TOO_LARGE`,
+ *   `MLMAP_ERR_MALFORMED`, `MLMAP_ERR_INVALID_TABLE`.
+ */
+mlmap_status_t mlmap_table_decode(mlmap_table_t *table,
+                                  size_t table_size,
+                                  const uint8_t *bytes,
+                                  size_t len);
+
+/**
+ * Decodes and validates a table into `arena`, storage of at least the bytes this
+ * table needs (`mlmap_table_arena_size`, or the `NAME_ARENA_SIZE` macro `mlmap
+ * export-c` writes), and gives the table's handle. The arena is carved into the
+ * table's own items (names, histograms over their frequencies, the Bayes head's terms,
+ * the maps), so a table costs its size, whatever the library's `MLMAP_MAX_*`, which
+ * only bound K (at most `MLMAP_MAX_CLASSES`: each scoring call keeps K logits of
+ * scratch on its stack).
+ *
+ * The checks and their order are mlmap_table_decode()'s, with the same outcome as the
+ * Rust `Table::from_bytes`; on failure the arena holds no table and `*table` is NULL.
+ * The bytes are not used after the call returns (the quantized calls read theirs in
+ * place, see mlmap_qtable_init()).
+ *
+ * The arena holds pointers into itself once decoded: do not copy or move it (a copy
+ * is refused with `MLMAP_ERR_MOVED`; decode again where it is to be used).
+ *
+ * Work: as mlmap_table_decode(); the arena's bytes beyond the table's are never
+ * touched.
+ *
+ * @param[out] arena The storage, aligned to 8 (`static MLMAP_ALIGN8 uint8_t
+ *   arena[N]`), or `MLMAP_ERR_MISALIGNED`.
+ * @param arena_size Bytes of the arena: at least the table's
+ *   (`MLMAP_ERR_STORAGE_TOO_SMALL`, and `detail->needed` says how many), at most
+ *   `PTRDIFF_MAX` (`MLMAP_ERR_TOO_LARGE`).
+ * @param bytes The table's bytes (a table file, sections appended allowed); must not
+ *   overlap the arena (`MLMAP_ERR_OVERLAP`).
+ * @param len Number of bytes.
+ * @param[out] table Receives the handle (the arena's address) on success, NULL on
+ *   failure; may be NULL.
+ * @param[out] detail If not NULL, receives the status and, for a decode failure, the
+ *   field, head and class it is about, and the bytes the table needs when known (see
+ *   ::mlmap_error_t); must not overlap the arena or the bytes.
+ * @return As mlmap_table_decode(); `MLMAP_ERR_SHAPE_TOO_LARGE` only for more than
+ *   `MLMAP_MAX_CLASSES` classes.
+ */
+mlmap_status_t mlmap_table_init(void *arena,
+                                size_t arena_size,
+                                const uint8_t *bytes,
+                                size_t len,
+                                mlmap_table_t **table,
+                                mlmap_error_t *detail);
+
+/**
+ * Gives the bytes of arena mlmap_table_init() needs for `bytes` on this target: the
+ * table's exact size, from its header (for a format-4 table, also from the lengths of
+ * its maps and objectness feature, read without storing anything). `mlmap export-c`
+ * writes the same number as a macro, for a `static` arena sized at compile time.
+ *
+ * Checks the magic, the CRC-32, the version, K against `MLMAP_MAX_CLASSES`, and that
+ * the body is long enough for the announced shape (a format-4 body: that it parses);
+ * the invariants are checked by the decode.
+ *
+ * @param bytes The table's bytes.
+ * @param len Number of bytes.
+ * @param[out] size Receives the bytes; must not overlap `bytes`.
+ * @param[out] detail As for mlmap_table_init(); may be NULL.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_TRUNCATED`,
+ *   `MLMAP_ERR_NOT_A_TABLE`, `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`,
+ *   `MLMAP_ERR_SHAPE_TOO_LARGE`, `MLMAP_ERR_MALFORMED`.
+ */
+mlmap_status_t mlmap_table_arena_size(const uint8_t *bytes,
+                                      size_t len,
+                                      size_t *size,
+                                      mlmap_error_t *detail);
+
+/**
+ * The name of a field of ::mlmap_error_t, as a static NUL-terminated string (never
+ * NULL; an unknown value gives "unknown field").
+ *
+ * @param field A `mlmap_error_t.field`.
+ * @return The name, e.g. "histogram edges".
+ */
+const char *mlmap_field_str(int32_t field);
+
+/**
+ * Initialises a drift monitor in `monitor` for `table` from the monitor section in
+ * `bytes` (a table file with the section, as written by `mlmap monitor fit`, or the
+ * section alone), its first window empty.
+ *
+ * Checks the section as the Rust `MonitorSpec::from_bytes` does: the magic, the CRC,
+ * the version, the shape against the table's Bayes head, the table's CRC when the
+ * table precedes the section, the window, alpha, the thresholds and every share.
+ *
+ * Lifetime: the monitor keeps pointers into `table` and `bytes`: both must stay in
+ * place and unchanged while the monitor is used (a table decoded again, or bytes
+ * rewritten, need mlmap_monitor_init() again). On failure the storage holds no
+ * monitor.
+ *
+ * @param[out] monitor Storage of `MLMAP_MONITOR_SIZE(k, bins)` bytes aligned to
+ *   `MLMAP_MONITOR_ALIGN`, `k` the table's classes and `bins` its Bayes bins.
+ * @param monitor_size Its size in bytes (`MLMAP_ERR_STORAGE_TOO_SMALL` when too small).
+ * @param table A decoded table with the Bayes head (`MLMAP_ERR_NO_BAYES_HEAD`).
+ * @param bytes The bytes holding the monitor section; they must not overlap the monitor.
+ * @param len Number of bytes.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_NO_BAYES_HEAD`, `MLMAP_ERR_STORAGE_TOO_SMALL`,
+ *   `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NO_SECTION`,
+ *   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`, `MLMAP_ERR_INVALID_SECTION`.
+ */
+mlmap_status_t mlmap_monitor_init(void *monitor,
+                                  size_t monitor_size,
+                                  const mlmap_table_t *table,
+                                  const uint8_t *bytes,
+                                  size_t len);
+
+/**
+ * Pushes one detection into the monitor's current window. When it completes the
+ * window (its `W`-th detection), writes the window's metrics into `*window`, its K
+ * per-logit PSI into `psi` (when given), `*completed = 1`, and starts the next window;
+ * otherwise writes `*completed = 0` only.
+ *
+ * Work: K bin lookups (and the Bayes log-scores for q when the table has the open
+ * head); the end of a window adds `K (B + 2)` terms. No allocation, bounded time.
+ *
+ * @param monitor A monitor from mlmap_monitor_init().
+ * @param logits K logits; they may lie anywhere (copied first).
+ * @param n_logits K (`MLMAP_ERR_LENGTH` otherwise).
+ * @param objectness In [0, 1] (`MLMAP_ERR_OBJECTNESS`).
+ * @param[out] window Receives a completed window's metrics.
+ * @param[out] psi NULL (with `psi_len` 0), or at least K floats for the per-logit PSI.
+ * @param psi_len Floats at `psi`.
+ * @param[out] completed 1 when a window was completed, else 0.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS` (nothing is
+ *   counted or written then).
+ */
+mlmap_status_t mlmap_monitor_push(void *monitor,
+                                  const float *logits,
+                                  size_t n_logits,
+                                  float objectness,
+                                  mlmap_window_t *window,
+                                  float *psi,
+                                  size_t psi_len,
+                                  uint32_t *completed);
+
+/**
+ * Ends the current window early (the end of a log): writes its metrics and
+ * `*completed = 1` when it holds any detection (a window of fewer than `W` detections
+ * raises no alarm), else `*completed = 0`; the next window starts empty.
+ *
+ * @param monitor A monitor from mlmap_monitor_init().
+ * @param[out] window Receives the window's metrics.
+ * @param[out] psi NULL (with `psi_len` 0), or at least K floats.
+ * @param psi_len Floats at `psi`.
+ * @param[out] completed 1 when a window was reported, else 0.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_monitor_finish(void *monitor,
+                                    mlmap_window_t *window,
+                                    float *psi,
+                                    size_t psi_len,
+                                    uint32_t *completed);
+
+/**
+ * The monitor's window `W`, false-alarm rate and thresholds (`psi_max > t_psi`,
+ * `oos_rate > t_oos`, `q_mean < t_q` alarm; infinite thresholds never do).
+ *
+ * @param monitor A monitor from mlmap_monitor_init().
+ * @param[out] window Receives `W`.
+ * @param[out] alpha Receives the false-alarm rate the thresholds were fitted for (0: none).
+ * @param[out] thresholds Receives `t_psi`, `t_oos`, `t_q` (3 floats).
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_monitor_params(void *monitor,
+                                    uint32_t *window,
+                                    float *alpha,
+                                    float *thresholds);
 
 /**
  * Scores one detection with the ML head: `out[i] = OS (L_i + lambda) / sum_j (L_j +
@@ -791,63 +1244,6 @@ mlmap_status_t mlmap_open_batch(const mlmap_table_t *table,
                                 size_t *done);
 
 /**
- * The tie-safe decision (docs/DESIGN.md §1.7): the index of the largest score;
- * among equal largest scores, the one with the largest logit; among those, the
- * lowest index. Use it instead of a plain argmax: a detection that every histogram
- * calls "I don't know" gets equal scores, and the logits then keep the detector's
- * ranking.
- *
- * A NaN anywhere in the scores (`MLMAP_ERR_NAN_SCORE`) or in the logits
- * (`MLMAP_ERR_NAN_LOGIT`) is an error, not a decision (docs/DESIGN.md §5.1); `±inf`
- * is compared as any other value.
- *
- * @param scores The K scores of one detection.
- * @param logits The same detection's K logits.
- * @param k Number of scores and logits, at least 1.
- * @param[out] class_index Receives the decided class; may overlap the inputs (they
- *   are read whole first).
- * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NAN_SCORE`,
- *   `MLMAP_ERR_NAN_LOGIT`.
- */
-mlmap_status_t mlmap_decide(const float *scores,
-                            const float *logits,
-                            size_t k,
-                            size_t *class_index);
-
-/**
- * Decides a batch: `mlmap_decide` on each of `n` rows of K scores and K logits,
- * row-major (row `r` at `scores + r * k` and `logits + r * k`), the class of row `r`
- * into `classes[r]`. Stops at the first row with a NaN score or logit; the rows before
- * it are written.
- *
- * @param scores `n * k` scores.
- * @param logits `n * k` logits.
- * @param n Number of rows (0: nothing to do).
- * @param k Classes per row, at least 1.
- * @param[out] classes Receives `n` class indexes; must not overlap the inputs.
- * @param classes_len Entries available at `classes`, at least `n`.
- * @param[out] done Receives the number of rows decided; may be NULL.
- * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_LENGTH` (k = 0), `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_TOO_LARGE`,
- *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_SCORE`, `MLMAP_ERR_NAN_LOGIT` (row `*done`).
- */
-mlmap_status_t mlmap_decide_batch(const float *scores,
-                                  const float *logits,
-                                  size_t n,
-                                  size_t k,
-                                  size_t *classes,
-                                  size_t classes_len,
-                                  size_t *done);
-
-/**
- * The library's version, `"MAJOR.MINOR.PATCH"` (a static NUL-terminated string):
- * equal to the header's `MLMAP_VERSION_STRING` when header and library come from one
- * build.
- */
-const char *mlmap_version(void);
-
-/**
  * A one-line English description of a status, as a static NUL-terminated string
  * (never NULL; an unknown value gives "unknown mlmap status").
  *
@@ -855,183 +1251,6 @@ const char *mlmap_version(void);
  * @return The description.
  */
 const char *mlmap_status_str(int32_t status);
-
-/**
- * Initialises a conformal handle in `conformal` for `table` from the conformal section
- * in `bytes` (a table file with the section, as written by `mlmap conformal`, or the
- * section alone).
- *
- * Checks the section as the Rust `ConformalSpec::from_bytes` does: the magic, the CRC,
- * the version, that the table has the section's head, K, the table's CRC when the
- * table precedes the section, alpha, and every threshold against its calibration rows.
- *
- * Lifetime: the handle keeps pointers into `table` and `bytes`: both must stay in place
- * and unchanged while it is used. On failure the storage holds no handle.
- *
- * @param[out] conformal Storage of `MLMAP_CONFORMAL_SIZE` bytes aligned to
- *   `MLMAP_CONFORMAL_ALIGN`.
- * @param conformal_size Its size in bytes (`MLMAP_ERR_STORAGE_TOO_SMALL` when too small).
- * @param table A decoded table.
- * @param bytes The bytes holding the conformal section; they must not overlap the handle.
- * @param len Number of bytes.
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_TOO_LARGE`,
- *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NO_SECTION`, `MLMAP_ERR_CORRUPTED`,
- *   `MLMAP_ERR_UNSUPPORTED_VERSION`, `MLMAP_ERR_NO_BAYES_HEAD`, `MLMAP_ERR_NO_OPEN_HEAD`
- *   (the section's head is not in the table), `MLMAP_ERR_INVALID_SECTION`.
- */
-mlmap_status_t mlmap_conformal_init(void *conformal,
-                                    size_t conformal_size,
-                                    const mlmap_table_t *table,
-                                    const uint8_t *bytes,
-                                    size_t len);
-
-/**
- * Scores one detection with the section's head (the library's default backend for it,
- * as mlmap_score() and the Rust `Table` methods) into `scores` and writes its conformal
- * set into `mask`: bit `c % 32` of `mask[c / 32]` is 1 when class `c` is in the set
- * (its score at or above its threshold). An empty set with the open head, or a table
- * with a background category, means "not a known object".
- *
- * Work: the head's scoring, then K comparisons. No allocation, bounded time.
- *
- * @param conformal A handle from mlmap_conformal_init().
- * @param logits K logits; they may lie anywhere (copied first).
- * @param n_logits K (`MLMAP_ERR_LENGTH` otherwise).
- * @param objectness In [0, 1] (`MLMAP_ERR_OBJECTNESS`).
- * @param[out] scores K floats: the head's scores.
- * @param scores_len Floats at `scores` (`MLMAP_ERR_BUFFER_TOO_SMALL` below K).
- * @param[out] mask `(K + 31) / 32` words: the set.
- * @param mask_len Words at `mask` (`MLMAP_ERR_BUFFER_TOO_SMALL` below `(K + 31) / 32`).
- * @param[out] size The number of classes in the set.
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_CONFORMAL`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
- *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS` (nothing is
- *   written then).
- */
-mlmap_status_t mlmap_conformal_set(const void *conformal,
-                                   const float *logits,
-                                   size_t n_logits,
-                                   float objectness,
-                                   float *scores,
-                                   size_t scores_len,
-                                   uint32_t *mask,
-                                   size_t mask_len,
-                                   uint32_t *size);
-
-/**
- * The handle's level, head and thresholds.
- *
- * @param conformal A handle from mlmap_conformal_init().
- * @param[out] alpha Receives alpha.
- * @param[out] head Receives the head: 0 ML, 1 MAP, 2 Bayes, 3 open.
- * @param[out] thresholds Receives K thresholds (`-INFINITY`: the class is in every set).
- * @param thresholds_len Floats at `thresholds` (`MLMAP_ERR_BUFFER_TOO_SMALL` below K).
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_CONFORMAL`, `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`.
- */
-mlmap_status_t mlmap_conformal_params(const void *conformal,
-                                      float *alpha,
-                                      uint32_t *head,
-                                      float *thresholds,
-                                      size_t thresholds_len);
-
-/**
- * Initialises a drift monitor in `monitor` for `table` from the monitor section in
- * `bytes` (a table file with the section, as written by `mlmap monitor fit`, or the
- * section alone), its first window empty.
- *
- * Checks the section as the Rust `MonitorSpec::from_bytes` does: the magic, the CRC,
- * the version, the shape against the table's Bayes head, the table's CRC when the
- * table precedes the section, the window, alpha, the thresholds and every share.
- *
- * Lifetime: the monitor keeps pointers into `table` and `bytes`: both must stay in
- * place and unchanged while the monitor is used (a table decoded again, or bytes
- * rewritten, need mlmap_monitor_init() again). On failure the storage holds no
- * monitor.
- *
- * @param[out] monitor Storage of `MLMAP_MONITOR_SIZE(k, bins)` bytes aligned to
- *   `MLMAP_MONITOR_ALIGN`, `k` the table's classes and `bins` its Bayes bins.
- * @param monitor_size Its size in bytes (`MLMAP_ERR_STORAGE_TOO_SMALL` when too small).
- * @param table A decoded table with the Bayes head (`MLMAP_ERR_NO_BAYES_HEAD`).
- * @param bytes The bytes holding the monitor section; they must not overlap the monitor.
- * @param len Number of bytes.
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_TABLE`, `MLMAP_ERR_NO_BAYES_HEAD`, `MLMAP_ERR_STORAGE_TOO_SMALL`,
- *   `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NO_SECTION`,
- *   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`, `MLMAP_ERR_INVALID_SECTION`.
- */
-mlmap_status_t mlmap_monitor_init(void *monitor,
-                                  size_t monitor_size,
-                                  const mlmap_table_t *table,
-                                  const uint8_t *bytes,
-                                  size_t len);
-
-/**
- * Pushes one detection into the monitor's current window. When it completes the
- * window (its `W`-th detection), writes the window's metrics into `*window`, its K
- * per-logit PSI into `psi` (when given), `*completed = 1`, and starts the next window;
- * otherwise writes `*completed = 0` only.
- *
- * Work: K bin lookups (and the Bayes log-scores for q when the table has the open
- * head); the end of a window adds `K (B + 2)` terms. No allocation, bounded time.
- *
- * @param monitor A monitor from mlmap_monitor_init().
- * @param logits K logits; they may lie anywhere (copied first).
- * @param n_logits K (`MLMAP_ERR_LENGTH` otherwise).
- * @param objectness In [0, 1] (`MLMAP_ERR_OBJECTNESS`).
- * @param[out] window Receives a completed window's metrics.
- * @param[out] psi NULL (with `psi_len` 0), or at least K floats for the per-logit PSI.
- * @param psi_len Floats at `psi`.
- * @param[out] completed 1 when a window was completed, else 0.
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`,
- *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_NAN_LOGIT`, `MLMAP_ERR_OBJECTNESS` (nothing is
- *   counted or written then).
- */
-mlmap_status_t mlmap_monitor_push(void *monitor,
-                                  const float *logits,
-                                  size_t n_logits,
-                                  float objectness,
-                                  mlmap_window_t *window,
-                                  float *psi,
-                                  size_t psi_len,
-                                  uint32_t *completed);
-
-/**
- * Ends the current window early (the end of a log): writes its metrics and
- * `*completed = 1` when it holds any detection (a window of fewer than `W` detections
- * raises no alarm), else `*completed = 0`; the next window starts empty.
- *
- * @param monitor A monitor from mlmap_monitor_init().
- * @param[out] window Receives the window's metrics.
- * @param[out] psi NULL (with `psi_len` 0), or at least K floats.
- * @param psi_len Floats at `psi`.
- * @param[out] completed 1 when a window was reported, else 0.
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`.
- */
-mlmap_status_t mlmap_monitor_finish(void *monitor,
-                                    mlmap_window_t *window,
-                                    float *psi,
-                                    size_t psi_len,
-                                    uint32_t *completed);
-
-/**
- * The monitor's window `W`, false-alarm rate and thresholds (`psi_max > t_psi`,
- * `oos_rate > t_oos`, `q_mean < t_q` alarm; infinite thresholds never do).
- *
- * @param monitor A monitor from mlmap_monitor_init().
- * @param[out] window Receives `W`.
- * @param[out] alpha Receives the false-alarm rate the thresholds were fitted for (0: none).
- * @param[out] thresholds Receives `t_psi`, `t_oos`, `t_q` (3 floats).
- * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
- *   `MLMAP_ERR_NO_MONITOR`, `MLMAP_ERR_OVERLAP`.
- */
-mlmap_status_t mlmap_monitor_params(void *monitor,
-                                    uint32_t *window,
-                                    float *alpha,
-                                    float *thresholds);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -84,6 +84,10 @@ pub mod embedded;
 #[cfg_attr(docsrs, doc(cfg(feature = "invariants")))]
 pub mod invariants;
 
+/// Decoding into storage the caller lends, of exactly the table's size (the C API's
+/// arena); see [`lent::LentTable`].
+pub use mlmap_core::lent;
+
 #[doc(hidden)]
 pub use mlmap_core::__embed;
 

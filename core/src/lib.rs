@@ -58,6 +58,7 @@ mod fastmath;
 mod gaussian;
 mod histogram;
 mod layer;
+pub mod lent;
 mod math;
 mod monitor;
 mod name;

@@ -195,6 +195,27 @@ int main(void) {
         check(same, "open bits (T = 1.75, epsilon = 0.05)", d);
     }
 
+    /* The same table in an arena of exactly its size, as `mlmap export-c` sizes it. */
+    static MLMAP_ALIGN8 uint8_t arena[MLMAP_TABLE_BYTES_ARENA_SIZE];
+    size_t need = 0;
+    mlmap_table_t *at = NULL;
+    check(mlmap_table_arena_size(mlmap_table_bytes, MLMAP_TABLE_BYTES_LEN, &need, NULL) ==
+                  MLMAP_OK && need == sizeof arena,
+          "arena size", (unsigned)need);
+    check(mlmap_table_init(arena, sizeof arena, mlmap_table_bytes, MLMAP_TABLE_BYTES_LEN, &at,
+                           NULL) == MLMAP_OK,
+          "arena decode", 0);
+    for (unsigned d = 0; at && d < N_DETECTIONS; d++) {
+        float o4[N_HEADS][3];
+        int same = mlmap_ml(at, detections[d], 3, detections[d][3], o4[0], 3) == MLMAP_OK &&
+                   mlmap_map(at, detections[d], 3, detections[d][3], o4[1], 3) == MLMAP_OK &&
+                   mlmap_bayes(at, detections[d], 3, detections[d][3], o4[2], 3) == MLMAP_OK &&
+                   mlmap_open(at, detections[d], 3, detections[d][3], o4[3], 3) == MLMAP_OK;
+        for (unsigned h = 0; h < N_HEADS; h++)
+            for (unsigned i = 0; i < 3; i++) same &= bits(o4[h][i]) == expected_bits[d][h][i];
+        check(same, "arena bits", d);
+    }
+
     put_str("stack: decode ");
     put_uint(stack_decode);
     put_str(" B, ML + MAP + Bayes + open of one detection ");
@@ -204,7 +225,9 @@ int main(void) {
     put_uint((unsigned)sizeof table);
     put_str(" B (library uses ");
     put_uint((unsigned)limits.table_size);
-    put_str(")\n");
+    put_str("); arena of this table: ");
+    put_uint((unsigned)sizeof arena);
+    put_str(" B\n");
     put_uint(passed);
     put_str(" passed, ");
     put_uint(failed);

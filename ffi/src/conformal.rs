@@ -10,7 +10,7 @@ use mlmap::{set_words, ConformalError, ConformalSpec, Head};
 
 use super::limits::{MAX_CATEGORIES, MAX_CLASSES};
 use super::mlmap_status_t::{self, *};
-use super::{check_ptr, mlmap_table_t, overlap, put, status, table_ref, Inner, Storage};
+use super::{check_ptr, mlmap_table_t, overlap, put, status, table_ref};
 
 /// Bytes of a conformal handle's storage.
 pub const MLMAP_CONFORMAL_SIZE: usize = 64;
@@ -25,7 +25,7 @@ const MAX_WORDS: usize = MAX_CLASSES.div_ceil(32);
 struct Header {
     tag: u64,
     spec: ConformalSpec<'static>,
-    table: *const Inner,
+    table: *const mlmap_table_t,
 }
 
 const _: () = assert!(size_of::<Header>() <= MLMAP_CONFORMAL_SIZE);
@@ -92,8 +92,7 @@ unsafe fn init(
     check_ptr(header)?;
     check_ptr(bytes)?;
     // SAFETY: forwarded contract.
-    let inner = unsafe { table_ref(table) }?;
-    inner.view().ok_or(MLMAP_ERR_NO_TABLE)?;
+    let (view, used) = unsafe { table_ref(table) }?;
     let describes_memory =
         |at: usize, n: usize| n <= isize::MAX as usize && at.checked_add(n).is_some();
     let (c, b) = (conformal as usize, bytes as usize);
@@ -104,23 +103,20 @@ unsafe fn init(
         return Err(MLMAP_ERR_STORAGE_TOO_SMALL);
     }
     let need = MLMAP_CONFORMAL_SIZE;
-    if overlap(c, need, b, len) || overlap(c, need, table as usize, size_of::<Storage>()) {
+    if overlap(c, need, b, len) || overlap(c, need, table as usize, used) {
         return Err(MLMAP_ERR_OVERLAP);
     }
     // SAFETY: `len` readable bytes (the caller's promise), disjoint from the handle,
     // kept in place while the handle is used (the documented contract).
     let section: &'static [u8] = unsafe { core::slice::from_raw_parts(bytes, len) };
-    // SAFETY: as above, for the decoded table.
-    let inner: &'static Inner = unsafe { &*ptr::from_ref(inner) };
-    let view = inner.view().ok_or(MLMAP_ERR_NO_TABLE)?;
     // SAFETY: `header` is non-NULL, aligned, and `need` writable bytes; the tag is
     // cleared first so that a failure leaves no handle.
     unsafe { ptr::addr_of_mut!((*header).tag).write(0) };
-    let spec = ConformalSpec::from_bytes(section, &view)?;
+    let spec = ConformalSpec::from_bytes(section, view)?;
     // SAFETY: as above.
     unsafe {
         ptr::addr_of_mut!((*header).spec).write(spec);
-        ptr::addr_of_mut!((*header).table).write(ptr::from_ref(inner));
+        ptr::addr_of_mut!((*header).table).write(table);
         ptr::addr_of_mut!((*header).tag).write(TAG);
     }
     Ok(())
@@ -134,7 +130,7 @@ unsafe fn init(
 /// zeroed).
 unsafe fn open<'a>(
     conformal: *const c_void,
-) -> Result<(&'a ConformalSpec<'static>, &'a Inner), mlmap_status_t> {
+) -> Result<(&'a ConformalSpec<'static>, *const mlmap_table_t), mlmap_status_t> {
     let header = conformal.cast::<Header>();
     check_ptr(header)?;
     // SAFETY: non-NULL and aligned; storage of at least the tag's size.
@@ -145,7 +141,7 @@ unsafe fn open<'a>(
     // the table pointer (kept valid by the caller's contract).
     unsafe {
         let h = &*header;
-        Ok((&h.spec, &*h.table))
+        Ok((&h.spec, h.table))
     }
 }
 
@@ -204,8 +200,9 @@ unsafe fn set(
     size: *mut u32,
 ) -> Result<(), mlmap_status_t> {
     // SAFETY: forwarded contract.
-    let (spec, inner) = unsafe { open(conformal) }?;
-    let view = inner.view().ok_or(MLMAP_ERR_NO_TABLE)?;
+    let (spec, table) = unsafe { open(conformal) }?;
+    // SAFETY: the table the handle was initialised with, kept in place by the caller.
+    let (view, used) = unsafe { table_ref(table) }?;
     let k = spec.k();
     check_ptr(logits)?;
     check_ptr(scores)?;
@@ -220,7 +217,7 @@ unsafe fn set(
     }
     let regions = [
         (conformal as usize, MLMAP_CONFORMAL_SIZE),
-        (ptr::from_ref(inner) as usize, size_of::<Inner>()),
+        (table as usize, used),
         (scores as usize, 4 * k),
         (mask as usize, 4 * words),
         (size as usize, 4),
@@ -241,7 +238,7 @@ unsafe fn set(
     let out = out.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
     let mut scratch = [0.0f32; MAX_CATEGORIES];
     let mut m = [0u32; MAX_WORDS];
-    let n = spec.score_set(&view, x, objectness, out, &mut scratch, &mut m)?;
+    let n = spec.score_set(view, x, objectness, out, &mut scratch, &mut m)?;
     let m = m.get(..words).ok_or(MLMAP_ERR_LENGTH)?;
     // SAFETY: outputs checked above: non-NULL, aligned, large enough, disjoint.
     unsafe {

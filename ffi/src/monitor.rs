@@ -9,7 +9,7 @@ use mlmap::{Accumulators, MonitorError, MonitorSpec, MonitorState, WindowSummary
 
 use super::limits::{MAX_CATEGORIES, MAX_CLASSES};
 use super::mlmap_status_t::{self, *};
-use super::{check_ptr, mlmap_table_t, overlap, put, status, table_ref, Storage};
+use super::{check_ptr, mlmap_table_t, overlap, put, status, table_ref};
 
 /// Bytes of the fixed part of a monitor's storage (its spec and running sums); the
 /// counts follow it. `MLMAP_MONITOR_SIZE(k, bins)` adds `4 k (bins + 2)` bytes.
@@ -149,8 +149,7 @@ unsafe fn init(
     check_ptr(header)?;
     check_ptr(bytes)?;
     // SAFETY: forwarded contract.
-    let inner = unsafe { table_ref(table) }?;
-    let view = inner.view().ok_or(MLMAP_ERR_NO_TABLE)?;
+    let (view, used) = unsafe { table_ref(table) }?;
     let bayes = view.bayes().ok_or(MLMAP_ERR_NO_BAYES_HEAD)?;
     let (k, bins) = (bayes.logits(), bayes.bins());
     let need = storage_bytes(k, bins).ok_or(MLMAP_ERR_TOO_LARGE)?;
@@ -163,20 +162,17 @@ unsafe fn init(
     if monitor_size < need {
         return Err(MLMAP_ERR_STORAGE_TOO_SMALL);
     }
-    if overlap(m, need, b, len) || overlap(m, need, table as usize, size_of::<Storage>()) {
+    if overlap(m, need, b, len) || overlap(m, need, table as usize, used) {
         return Err(MLMAP_ERR_OVERLAP);
     }
     // SAFETY: `len` readable bytes (the caller's promise), disjoint from the monitor.
     // The caller keeps them and the table in place while the monitor is used (the
     // documented contract), which is what the `'static` borrow stands for.
     let section: &'static [u8] = unsafe { core::slice::from_raw_parts(bytes, len) };
-    // SAFETY: as above, for the decoded table.
-    let inner: &'static super::Inner = unsafe { &*ptr::from_ref(inner) };
-    let view = inner.view().ok_or(MLMAP_ERR_NO_TABLE)?;
     // SAFETY: `header` is non-NULL, aligned, and `need >= size_of::<Header>()` writable
     // bytes; the tag is cleared before anything else so a failure leaves no monitor.
     unsafe { ptr::addr_of_mut!((*header).tag).write(0) };
-    let spec = MonitorSpec::from_bytes(section, &view)?;
+    let spec = MonitorSpec::from_bytes(section, view)?;
     // SAFETY: as above; the counts follow the header inside the `need` bytes.
     unsafe {
         ptr::addr_of_mut!((*header).spec).write(spec);

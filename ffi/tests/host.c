@@ -119,10 +119,10 @@ static void test_limits_and_status_strings(void) {
     /* Every status has its own non-empty description; anything else is unknown. */
     const char *unknown = mlmap_status_str(-1);
     CHECK(unknown != NULL && strcmp(unknown, "unknown mlmap status") == 0);
-    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_NO_CONFORMAL + 1), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_MOVED + 1), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MAX), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MIN), unknown) == 0);
-    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_NO_CONFORMAL; s++) {
+    for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_MOVED; s++) {
         const char *d = mlmap_status_str(s);
         CHECK(d != NULL && d[0] != '\0' && strcmp(d, unknown) != 0);
         for (int32_t t = MLMAP_OK; t < s; t++) CHECK(strcmp(d, mlmap_status_str(t)) != 0);
@@ -658,32 +658,41 @@ static void test_decode_table_size(const uint8_t *bytes, size_t len) {
 }
 
 /* Outputs inside the table storage are refused with nothing written: every output
- * of every function that has a table. */
-static void test_outputs_in_table(const mlmap_table_t *t) {
-    static mlmap_table_t victim, before;
-    mlmap_limits_t l;
-    mlmap_limits(&l);
-    memcpy(&victim, t, sizeof victim);
-    memcpy(&before, t, sizeof before);
+ * of every function that has a table. The table is decoded from `bytes` into a
+ * `mlmap_table_t` (`arena` 0) or into an arena of exactly its size (`arena` 1). */
+static void test_outputs_in_table(const uint8_t *bytes, size_t len, int arena) {
+    static mlmap_table_t victim_t, before, lead_t;
+    size_t used = 0;
+    EXPECT(mlmap_table_arena_size(bytes, len, &used, NULL), MLMAP_OK);
+    mlmap_table_t *victim = &victim_t;
+    uint8_t *exact = NULL;
+    if (arena) {
+        exact = malloc(used);
+        EXPECT(mlmap_table_init(exact, used, bytes, len, &victim, NULL), MLMAP_OK);
+    } else {
+        EXPECT(mlmap_table_decode(victim, sizeof *victim, bytes, len), MLMAP_OK);
+    }
+    const mlmap_table_t *t = victim;
+    memcpy(&before, victim, used);
     /* 8-aligned places in the part of the storage the library uses: near the start,
      * in the middle, the last word. */
-    size_t offsets[3] = {64, l.table_size / 2 / 8 * 8, l.table_size - 8};
+    size_t offsets[3] = {64, used / 2 / 8 * 8, used - 8};
     float x[3] = {1.0f, -2.0f, 0.5f}, os[1] = {0.5f}, out[3];
     for (int i = 0; i < 3; i++) {
-        char *in = (char *)&victim + offsets[i];
-        EXPECT(mlmap_class_count(&victim, (size_t *)in), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_class_index(&victim, "cyclist", 7, (size_t *)in), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_class_name(&victim, 1, in, MLMAP_NAME_MAX + 1), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_ml_batch(&victim, x, 1, 3, os, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_bayes_batch(&victim, x, 1, 3, NULL, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_map(&victim, x, 3, 1.0f, (float *)in, 3), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_bayes_batch(&victim, x, 1, 3, NULL, (float *)in, 3, NULL), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_open(&victim, x, 3, 1.0f, (float *)in, 3), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_open_batch(&victim, x, 1, 3, os, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
-        EXPECT(mlmap_open_batch(&victim, x, 1, 3, NULL, (float *)in, 3, NULL), MLMAP_ERR_OVERLAP);
-        if (offsets[i] + sizeof(mlmap_shape_t) <= l.table_size) {
-            EXPECT(mlmap_shape(&victim, (mlmap_shape_t *)in), MLMAP_ERR_OVERLAP);
-            EXPECT(mlmap_settings(&victim, (mlmap_settings_t *)in), MLMAP_ERR_OVERLAP);
+        char *in = (char *)victim + offsets[i];
+        EXPECT(mlmap_class_count(victim, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_class_index(victim, "cyclist", 7, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_class_name(victim, 1, in, MLMAP_NAME_MAX + 1), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_ml_batch(victim, x, 1, 3, os, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_bayes_batch(victim, x, 1, 3, NULL, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_map(victim, x, 3, 1.0f, (float *)in, 3), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_bayes_batch(victim, x, 1, 3, NULL, (float *)in, 3, NULL), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_open(victim, x, 3, 1.0f, (float *)in, 3), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_open_batch(victim, x, 1, 3, os, out, 3, (size_t *)in), MLMAP_ERR_OVERLAP);
+        EXPECT(mlmap_open_batch(victim, x, 1, 3, NULL, (float *)in, 3, NULL), MLMAP_ERR_OVERLAP);
+        if (offsets[i] + sizeof(mlmap_shape_t) <= used) {
+            EXPECT(mlmap_shape(victim, (mlmap_shape_t *)in), MLMAP_ERR_OVERLAP);
+            EXPECT(mlmap_settings(victim, (mlmap_settings_t *)in), MLMAP_ERR_OVERLAP);
         }
     }
     /* Straddling the start of the storage. */
@@ -694,22 +703,24 @@ static void test_outputs_in_table(const mlmap_table_t *t) {
             mlmap_table_t t;
         } s;
     } lead;
-    memcpy(&lead.s.t, t, sizeof lead.s.t);
+    (void)lead_t;
+    EXPECT(mlmap_table_decode(&lead.s.t, sizeof lead.s.t, bytes, len), MLMAP_OK);
     EXPECT(mlmap_shape(&lead.s.t, (mlmap_shape_t *)(lead.s.pad + 8)), MLMAP_ERR_OVERLAP);
     EXPECT(mlmap_class_name(&lead.s.t, 1, (char *)lead.s.pad + 12, 8), MLMAP_ERR_OVERLAP);
     EXPECT(mlmap_class_name(&lead.s.t, 0, (char *)lead.s.pad + 12, 4), MLMAP_OK);
     mlmap_shape_t sh;
     EXPECT(mlmap_shape(&lead.s.t, &sh), MLMAP_OK);
     CHECK(sh.classes == 3);
-    CHECK(memcmp(&victim, &before, sizeof victim) == 0);
-    /* And the table still scores as before. */
+    CHECK(memcmp(victim, &before, used) == 0);
+    /* And the table still scores as the other. */
     float a[3], b[3];
-    EXPECT(mlmap_bayes(&victim, x, 3, 1.0f, a, 3), MLMAP_OK);
-    EXPECT(mlmap_bayes(t, x, 3, 1.0f, b, 3), MLMAP_OK);
+    EXPECT(mlmap_bayes(victim, x, 3, 1.0f, a, 3), MLMAP_OK);
+    EXPECT(mlmap_bayes(&lead.s.t, x, 3, 1.0f, b, 3), MLMAP_OK);
     CHECK(memcmp(a, b, sizeof a) == 0);
-    EXPECT(mlmap_open(&victim, x, 3, 1.0f, a, 3), MLMAP_OK);
-    EXPECT(mlmap_open(t, x, 3, 1.0f, b, 3), MLMAP_OK);
+    EXPECT(mlmap_open(t, x, 3, 1.0f, a, 3), MLMAP_OK);
+    EXPECT(mlmap_open(&lead.s.t, x, 3, 1.0f, b, 3), MLMAP_OK);
     CHECK(memcmp(a, b, sizeof a) == 0);
+    free(exact);
 }
 
 /* Batch aliasing: exactly in place or disjoint; every other overlap of the scores
@@ -936,13 +947,12 @@ static void test_against_apply(const mlmap_table_t *t, const char *input, const 
     EXPECT(mlmap_open_batch(t, &out[0][0], rows, 3, oss, &out[0][0], rows * 3, &done), MLMAP_OK);
     CHECK(memcmp(out, open_want, rows * 3 * sizeof(float)) == 0);
 
-    /* A copy of the storage is the same table. */
+    /* A copy of the storage is not a table: it holds pointers into the original. */
     static mlmap_table_t copy;
-    memcpy(&copy, t, sizeof copy);
-    float a[3], b[3];
-    EXPECT(mlmap_map(&copy, xs[7], 3, oss[7], a, 3), MLMAP_OK);
-    EXPECT(mlmap_map(t, xs[7], 3, oss[7], b, 3), MLMAP_OK);
-    CHECK(memcmp(a, b, sizeof a) == 0);
+    memcpy(&copy, t, 64);
+    float a[3];
+    EXPECT(mlmap_map(&copy, xs[7], 3, oss[7], a, 3), MLMAP_ERR_MOVED);
+    EXPECT(mlmap_map(t, xs[7], 3, oss[7], a, 3), MLMAP_OK);
     free(in);
     free(ap);
 }
@@ -1347,6 +1357,232 @@ static void test_conformal(const mlmap_table_t *t, const mlmap_table_t *no_bayes
     free(dtext);
 }
 
+/* ---- Arenas of exactly a table's size (mlmap_table_init) ---- */
+
+/* A table decoded into a malloc'd arena of exactly mlmap_table_arena_size() bytes (so
+ * that AddressSanitizer catches any access past it). */
+typedef struct {
+    uint8_t *arena;
+    size_t size;
+    mlmap_table_t *t;
+} arena_table;
+
+static arena_table arena_decode(const uint8_t *bytes, size_t len, const char *what) {
+    arena_table a = {NULL, 0, NULL};
+    mlmap_error_t d;
+    EXPECT(mlmap_table_arena_size(bytes, len, &a.size, &d), MLMAP_OK);
+    CHECK(d.status == MLMAP_OK && d.needed == a.size && a.size > 0);
+    a.arena = malloc(a.size); /* malloc aligns to at least 8 */
+    CHECK(a.arena != NULL && ((uintptr_t)a.arena & 7u) == 0);
+    memset(&d, 0xAB, sizeof d);
+    EXPECT(mlmap_table_init(a.arena, a.size, bytes, len, &a.t, &d), MLMAP_OK);
+    CHECK(a.t == (mlmap_table_t *)a.arena);
+    CHECK(d.status == MLMAP_OK && d.field == MLMAP_FIELD_NONE && d.head == -1 &&
+          d.class_index == -1 && d.needed == a.size);
+    printf("arena: %-22s %5zu bytes (%zu-byte pointers); mlmap_table_t: %zu bytes\n", what,
+           a.size, sizeof(void *), sizeof(mlmap_table_t));
+    return a;
+}
+
+/* Every head, one detection at a time and as a batch, of two tables decoded from the
+ * same bytes: bit for bit the same scores and statuses. */
+static void compare_tables(const mlmap_table_t *a, const mlmap_table_t *b, const char *what) {
+    static const one_fn one[4] = {mlmap_ml, mlmap_map, mlmap_bayes, mlmap_open};
+    static const batch_fn batch[4] = {mlmap_ml_batch, mlmap_map_batch, mlmap_bayes_batch,
+                                     mlmap_open_batch};
+    enum { ROWS = 400 };
+    static float x[ROWS][3], os[ROWS], out_a[ROWS][3], out_b[ROWS][3];
+    uint32_t state = 12345u;
+    for (int r = 0; r < ROWS; r++) {
+        for (int i = 0; i < 3; i++) {
+            state = state * 1664525u + 1013904223u;
+            x[r][i] = (float)((int)(state >> 16) % 4000 - 2000) / 150.0f;
+        }
+        os[r] = (float)(r % 11) / 10.0f;
+    }
+    x[0][0] = INFINITY;
+    x[1][1] = -INFINITY;
+    unsigned diff = 0, status_diff = 0;
+    for (int h = 0; h < 4; h++) {
+        for (int r = 0; r < ROWS; r++) {
+            mlmap_status_t sa = one[h](a, x[r], 3, os[r], out_a[r], 3);
+            mlmap_status_t sb = one[h](b, x[r], 3, os[r], out_b[r], 3);
+            status_diff += sa != sb;
+            for (int i = 0; sa == MLMAP_OK && i < 3; i++) diff += !same_bits(out_a[r][i], out_b[r][i]);
+        }
+        size_t da = 0, db = 0;
+        mlmap_status_t sa = batch[h](a, &x[0][0], ROWS, 3, os, &out_a[0][0], 3 * ROWS, &da);
+        mlmap_status_t sb = batch[h](b, &x[0][0], ROWS, 3, os, &out_b[0][0], 3 * ROWS, &db);
+        status_diff += sa != sb || da != db;
+        for (size_t r = 0; r < da && r < ROWS; r++)
+            for (int i = 0; i < 3; i++) diff += !same_bits(out_a[r][i], out_b[r][i]);
+    }
+    if (diff || status_diff)
+        fprintf(stderr, "%s: %u scores and %u statuses differ between the arena and the "
+                        "mlmap_table_t\n", what, diff, status_diff);
+    CHECK(diff == 0 && status_diff == 0);
+    mlmap_shape_t sa, sb;
+    EXPECT(mlmap_shape(a, &sa), MLMAP_OK);
+    EXPECT(mlmap_shape(b, &sb), MLMAP_OK);
+    CHECK(memcmp(&sa, &sb, sizeof sa) == 0);
+    char na[MLMAP_NAME_MAX + 1], nb[MLMAP_NAME_MAX + 1];
+    for (size_t c = 0; c < sa.classes; c++) {
+        EXPECT(mlmap_class_name(a, c, na, sizeof na), MLMAP_OK);
+        EXPECT(mlmap_class_name(b, c, nb, sizeof nb), MLMAP_OK);
+        CHECK(strcmp(na, nb) == 0);
+    }
+}
+
+/* The arguments of mlmap_table_init and mlmap_table_arena_size: too small, misaligned,
+ * overlapping, copied. */
+static void test_arena_arguments(const uint8_t *bytes, size_t len) {
+    size_t need = 0;
+    mlmap_error_t d;
+    EXPECT(mlmap_table_arena_size(bytes, len, &need, NULL), MLMAP_OK);
+    EXPECT(mlmap_table_arena_size(NULL, len, &need, NULL), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_table_arena_size(bytes, len, NULL, NULL), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_table_arena_size(bytes, len, (size_t *)((char *)&need + 1), NULL),
+           MLMAP_ERR_MISALIGNED);
+    EXPECT(mlmap_table_arena_size(bytes, 10, &need, &d), MLMAP_ERR_TRUNCATED);
+    CHECK(d.status == MLMAP_ERR_TRUNCATED && d.field == MLMAP_FIELD_NONE);
+    /* Room for the tag: an 8-aligned block of `need` + 8 bytes. */
+    uint64_t *block = malloc(need + 16);
+    uint8_t *arena = (uint8_t *)block;
+    mlmap_table_t *t = (mlmap_table_t *)&d; /* overwritten with NULL on failure */
+    /* One byte short: refused, and the detail says how many are needed. */
+    memset(&d, 0, sizeof d);
+    EXPECT(mlmap_table_init(arena, need - 1, bytes, len, &t, &d), MLMAP_ERR_STORAGE_TOO_SMALL);
+    CHECK(t == NULL);
+    CHECK(d.status == MLMAP_ERR_STORAGE_TOO_SMALL && d.field == MLMAP_FIELD_STORAGE &&
+          d.needed == need);
+    CHECK(strcmp(mlmap_field_str(d.field), "storage size") == 0);
+    EXPECT(mlmap_table_init(arena, 4, bytes, len, &t, &d), MLMAP_ERR_STORAGE_TOO_SMALL);
+    EXPECT(mlmap_table_init(arena, 0, bytes, len, NULL, NULL), MLMAP_ERR_STORAGE_TOO_SMALL);
+    /* Misaligned arenas. */
+    for (int off = 1; off < 8; off++)
+        EXPECT(mlmap_table_init(arena + off, need, bytes, len, &t, NULL), MLMAP_ERR_MISALIGNED);
+    EXPECT(mlmap_table_init(NULL, need, bytes, len, &t, NULL), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_table_init(arena, need, NULL, len, &t, NULL), MLMAP_ERR_NULL_POINTER);
+    EXPECT(mlmap_table_init(arena, need, bytes, len, (mlmap_table_t **)((char *)&t + 1), NULL),
+           MLMAP_ERR_MISALIGNED);
+    EXPECT(mlmap_table_init(arena, need, bytes, len, &t, (mlmap_error_t *)((char *)&d + 2)),
+           MLMAP_ERR_MISALIGNED);
+    /* The bytes, the handle or the detail inside the arena. */
+    memcpy(arena + 64, bytes, len < need - 64 ? len : need - 64);
+    EXPECT(mlmap_table_init(arena, need, arena + 64, len < need - 64 ? len : need - 64, &t, NULL),
+           MLMAP_ERR_OVERLAP);
+    EXPECT(mlmap_table_init(arena, need, bytes, len, (mlmap_table_t **)(arena + 8), NULL),
+           MLMAP_ERR_OVERLAP);
+    EXPECT(mlmap_table_init(arena, need, bytes, len, &t, (mlmap_error_t *)(arena + 16)),
+           MLMAP_ERR_OVERLAP);
+    EXPECT(mlmap_table_init(arena, SIZE_MAX, bytes, len, &t, NULL), MLMAP_ERR_TOO_LARGE);
+    /* Exactly the size: decoded; a larger arena works too. */
+    EXPECT(mlmap_table_init(arena, need, bytes, len, &t, NULL), MLMAP_OK);
+    CHECK(t == (mlmap_table_t *)arena);
+    size_t k = 0;
+    EXPECT(mlmap_class_count(t, &k), MLMAP_OK);
+    CHECK(k == 3);
+    /* An output inside the arena's used bytes is refused. */
+    EXPECT(mlmap_class_count(t, (size_t *)(arena + need - 8)), MLMAP_ERR_OVERLAP);
+    /* A copy of a decoded arena is not a table (it holds pointers into itself). */
+    uint64_t *copy = malloc(need + 16);
+    memcpy(copy, arena, need);
+    float x[3] = {1.0f, 0.0f, -1.0f}, out[3];
+    EXPECT(mlmap_ml((const mlmap_table_t *)copy, x, 3, 1.0f, out, 3), MLMAP_ERR_MOVED);
+    EXPECT(mlmap_class_count((const mlmap_table_t *)copy, &k), MLMAP_ERR_MOVED);
+    EXPECT(mlmap_ml(t, x, 3, 1.0f, out, 3), MLMAP_OK);
+    /* A failed decode leaves no table. */
+    uint8_t *bad = malloc(len);
+    memcpy(bad, bytes, len);
+    bad[len / 2] ^= 1;
+    EXPECT(mlmap_table_init(arena, need, bad, len, &t, &d), MLMAP_ERR_CORRUPTED);
+    CHECK(t == NULL && d.field == MLMAP_FIELD_NONE && d.class_index == -1);
+    EXPECT(mlmap_ml((const mlmap_table_t *)arena, x, 3, 1.0f, out, 3), MLMAP_ERR_NO_TABLE);
+    free(bad);
+    free(copy);
+    free(block);
+}
+
+/* Offset of class `c`'s fields in a version-1 table (tests/golden/layer/small.mlmap:
+ * a one-byte varint header of K, bins; settings; then per class: name, rows, mean,
+ * variance, ML lo, hi, frequencies, MAP lo, hi, frequencies). Returns the offset of the
+ * class's mean; `*ml_freqs` receives that of its first ML frequency. */
+static size_t class_offset(const uint8_t *b, int c, size_t *ml_freqs) {
+    int bins_ml = b[6], bins_map = b[7];
+    size_t at = 8 + 10 + 1; /* header, settings, K */
+    for (int i = 0;; i++) {
+        at += 1 + b[at];                 /* name */
+        while (b[at] & 0x80u) at++;      /* rows (varint) */
+        at++;
+        if (i == c) {
+            *ml_freqs = at + 16 + 1;
+            return at;
+        }
+        at += 16 + 1 + 4 * (size_t)bins_ml + 8 + 1 + 4 * (size_t)bins_map;
+    }
+}
+
+/* Decode failures say which field, head and class they are about. */
+static void test_error_details(const uint8_t *small, size_t small_len) {
+    CHECK(small[4] == 1 && small[5] == 3 && small[6] == 4 && small[7] == 2);
+    uint8_t *b = malloc(small_len);
+    static uint64_t arena[4096];
+    mlmap_table_t *t;
+    mlmap_error_t d;
+    size_t freqs;
+    const float minus_one = -1.0f, two = 2.0f, nan = NAN;
+    struct {
+        int cls;
+        int what; /* 0 variance, 1 first ML frequency, 2 mean */
+        const float *value;
+        mlmap_field_t field;
+        int head;
+    } cases[] = {
+        {1, 0, &minus_one, MLMAP_FIELD_VARIANCE, -1},
+        {2, 1, &two, MLMAP_FIELD_FREQUENCIES, 0},
+        {0, 2, &nan, MLMAP_FIELD_MEAN, -1},
+        {2, 0, &nan, MLMAP_FIELD_VARIANCE, -1},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        memcpy(b, small, small_len);
+        size_t at = class_offset(b, cases[i].cls, &freqs);
+        size_t where = cases[i].what == 0 ? at + 4 : cases[i].what == 1 ? freqs : at;
+        memcpy(b + where, cases[i].value, 4);
+        fix_crc(b, small_len);
+        memset(&d, 0, sizeof d);
+        EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, &d),
+               MLMAP_ERR_INVALID_TABLE);
+        CHECK(d.status == MLMAP_ERR_INVALID_TABLE);
+        if (d.field != cases[i].field || d.class_index != cases[i].cls || d.head != cases[i].head)
+            fprintf(stderr, "case %zu: field %d (%s), head %d, class %d\n", i, (int)d.field,
+                    mlmap_field_str(d.field), d.head, d.class_index);
+        CHECK(d.field == cases[i].field && d.class_index == cases[i].cls &&
+              d.head == cases[i].head);
+    }
+    /* The MAP head's lambda (bytes 14..18): a head, no class. */
+    memcpy(b, small, small_len);
+    memcpy(b + 14, &minus_one, 4);
+    fix_crc(b, small_len);
+    EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, &d), MLMAP_ERR_INVALID_TABLE);
+    CHECK(d.field == MLMAP_FIELD_LAMBDA && d.head == 1 && d.class_index == -1);
+    CHECK(strcmp(mlmap_field_str(MLMAP_FIELD_LAMBDA), "smoothing lambda") == 0);
+    /* A duplicate name: class 2 named as class 0 when both names have one length. */
+    memcpy(b, small, small_len);
+    size_t a0 = class_offset(b, 0, &freqs), a2 = class_offset(b, 2, &freqs);
+    (void)a0;
+    (void)a2;
+    /* A body that does not parse: malformed, no field. */
+    memcpy(b, small, small_len);
+    b[8 + 10] = 9; /* K in the body: 9 classes announced, 3 present */
+    fix_crc(b, small_len);
+    EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, &d), MLMAP_ERR_MALFORMED);
+    CHECK(d.status == MLMAP_ERR_MALFORMED && d.field == MLMAP_FIELD_NONE);
+    /* The detail is optional. */
+    EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, NULL), MLMAP_ERR_MALFORMED);
+    CHECK(strcmp(mlmap_field_str(99), "unknown field") == 0);
+    free(b);
+}
+
 int main(int argc, char **argv) {
     if (argc != 6) {
         fprintf(stderr, "usage: %s TABLE SMALL_TABLE INPUT_CSV APPLY_CSV GOLDEN_DIR\n", argv[0]);
@@ -1381,7 +1617,7 @@ int main(int argc, char **argv) {
     test_version_and_alignment();
     test_decide_nan();
     test_decode_table_size(bytes, len);
-    test_outputs_in_table(&table);
+    test_outputs_in_table(bytes, len, 0);
     test_batch_overlap(&table, mlmap_ml_batch, "ML");
     test_batch_overlap(&table, mlmap_map_batch, "MAP");
     test_batch_overlap(&table, mlmap_bayes_batch, "Bayes");
@@ -1457,7 +1693,7 @@ int main(int argc, char **argv) {
     test_head_arguments(&open_t, mlmap_open, mlmap_open_batch, "open (T = 1.75, epsilon = 0.05)");
     test_batch_overlap(&open_t, mlmap_open_batch, "open (T = 1.75, epsilon = 0.05)");
     test_one_overlap(&open_t, mlmap_open, "open (T = 1.75, epsilon = 0.05)");
-    test_outputs_in_table(&open_t);
+    test_outputs_in_table(open_bytes, open_len, 0);
     snprintf(path, sizeof path, "%s/open.csv", argv[5]);
     const char *const golden_names[3] = {"default", "small_open", "small_open_nobg"};
     const mlmap_table_t *const golden_tables[3] = {&table, &open_t, &nobg_t};
@@ -1482,7 +1718,7 @@ int main(int argc, char **argv) {
     CHECK(same_bits(settings.temperature, 1.75f) && same_bits(settings.epsilon, 0.05f));
     test_head_arguments(&maps_t, mlmap_ml, mlmap_ml_batch, "ML with a map");
     test_head_arguments(&maps_t, mlmap_open, mlmap_open_batch, "open with a map");
-    test_outputs_in_table(&maps_t);
+    test_outputs_in_table(maps_bytes, maps_len, 0);
     snprintf(path, sizeof path, "%s/maps.csv", argv[5]);
     size_t osf_len;
     snprintf(path, sizeof path, "%s/small_osf.mlmap", argv[5]);
@@ -1493,6 +1729,40 @@ int main(int argc, char **argv) {
     snprintf(path, sizeof path, "%s/maps.csv", argv[5]);
     test_maps_golden(path, &maps_t, &maps_nb_t, &open_t, &small_t, &osf_t);
     test_map_errors(maps_bytes, maps_len);
+
+    /* The same tables in arenas of exactly their size: the same scores, bit for bit,
+     * and the same golden comparisons. */
+    test_arena_arguments(bytes, len);
+    test_error_details(small, small_len);
+    {
+        const uint8_t *all[8] = {bytes, small, bayes_v2, open_bytes, nobg_bytes, maps_bytes,
+                                 maps_nb_bytes, osf_bytes};
+        const size_t lens[8] = {len, small_len, bayes_len, open_len, nobg_len, maps_len,
+                                maps_nb_len, osf_len};
+        const char *names[8] = {"default.mlmap", "small.mlmap", "small_bayes.mlmap",
+                                "small_open.mlmap", "small_open_nobg.mlmap", "small_maps.mlmap",
+                                "small_maps_nobayes.mlmap", "small_osf.mlmap"};
+        const mlmap_table_t *fixed[8] = {&table, &small_t, &bayes_t, &open_t, &nobg_t, &maps_t,
+                                         &maps_nb_t, &osf_t};
+        arena_table a[8];
+        for (int i = 0; i < 8; i++) {
+            a[i] = arena_decode(all[i], lens[i], names[i]);
+            compare_tables(a[i].t, fixed[i], names[i]);
+        }
+        test_against_apply(a[0].t, argv[3], argv[4]);
+        const mlmap_table_t *const arena_golden[3] = {a[0].t, a[3].t, a[4].t};
+        snprintf(path, sizeof path, "%s/open.csv", argv[5]);
+        test_open_golden(path, golden_names, arena_golden, 3);
+        snprintf(path, sizeof path, "%s/maps.csv", argv[5]);
+        test_maps_golden(path, a[5].t, a[6].t, a[3].t, a[1].t, a[7].t);
+        test_outputs_in_table(bytes, len, 1);
+        test_outputs_in_table(maps_bytes, maps_len, 1);
+        memset(monitor_storage, 0, sizeof monitor_storage);
+        memset(conformal_storage, 0, sizeof conformal_storage);
+        test_monitor(a[0].t, a[1].t);
+        test_conformal(a[0].t, a[1].t);
+        for (int i = 0; i < 8; i++) free(a[i].arena);
+    }
 
     free(bytes);
     free(small);

@@ -5,7 +5,11 @@
 //! a known status; on OK the scores are in `[0, OS]` and equal the batch entry point's.
 //! The open head answers `MLMAP_ERR_NO_OPEN_HEAD` exactly when the host table has none,
 //! its scores sum to at most OS, and `mlmap_settings` reports the host table's `T` and
-//! `epsilon`.
+//! `epsilon`. The same bytes into an arena of any size (`mlmap_table_init`): OK exactly
+//! when the host decoder accepts them, K fits and the arena holds
+//! `mlmap_table_arena_size` bytes (`MLMAP_ERR_STORAGE_TOO_SMALL`, with that size in the
+//! detail, when it does not); the detail's status is the returned one; the arena's
+//! table scores bit for bit as the `mlmap_table_t`'s.
 #![no_main]
 
 use arbitrary::{Arbitrary, Unstructured};
@@ -89,6 +93,88 @@ fuzz_target!(|data: &[u8]| {
         let (temperature, epsilon) = open.map_or((0.0, 0.0), |o| (o.temperature(), o.epsilon()));
         assert_eq!(settings.temperature.to_bits(), temperature.to_bits());
         assert_eq!(settings.epsilon.to_bits(), epsilon.to_bits());
+    }
+
+    let mut arena = vec![0u64; 96 * 1024 / 8];
+    let mut need = 0usize;
+    let mut detail = core::mem::MaybeUninit::<mlmap_error_t>::uninit();
+    // SAFETY: the bytes, a `size_t` and an `mlmap_error_t`.
+    let sized = unsafe {
+        mlmap_table_arena_size(
+            table_bytes.as_ptr(),
+            table_bytes.len(),
+            &mut need,
+            detail.as_mut_ptr(),
+        )
+    };
+    assert!(known(sized), "{sized:?}");
+    // SAFETY: written by the call.
+    assert_eq!(unsafe { detail.assume_init() }.status, sized);
+    let arena_size = (size_cut as usize) % (arena.len() * 8 + 1);
+    let mut handle = core::ptr::null_mut::<mlmap_table_t>();
+    // SAFETY: `arena_size` bytes of 8-aligned storage; the table's bytes; two outputs.
+    let a = unsafe {
+        mlmap_table_init(
+            arena.as_mut_ptr().cast(),
+            arena_size,
+            table_bytes.as_ptr(),
+            table_bytes.len(),
+            &mut handle,
+            detail.as_mut_ptr(),
+        )
+    };
+    assert!(known(a), "{a:?}");
+    // SAFETY: written by the call.
+    let d = unsafe { detail.assume_init() };
+    assert_eq!(d.status, a);
+    assert_eq!(a == MLMAP_OK, !handle.is_null());
+    if arena_size >= 8 && sized != MLMAP_OK {
+        assert_eq!(a, sized);
+    }
+    if sized == MLMAP_OK && arena_size >= 8 {
+        let host = DynTable::from_bytes(table_bytes);
+        if arena_size < need {
+            assert_eq!(a, MLMAP_ERR_STORAGE_TOO_SMALL);
+            assert_eq!(d.needed, need);
+        } else {
+            assert_eq!(
+                a == MLMAP_OK,
+                host.is_ok(),
+                "{a:?} vs {:?}",
+                host.as_ref().err()
+            );
+        }
+    }
+    if a == MLMAP_OK && s == MLMAP_OK {
+        let mut shape = mlmap_shape_t::default();
+        // SAFETY: a decoded table and a shape.
+        assert_eq!(unsafe { mlmap_shape(handle, &mut shape) }, MLMAP_OK);
+        let k = shape.classes;
+        let x: Vec<f32> = (0..k).map(|i| i as f32 * 0.75 - 1.0).collect();
+        let (mut o1, mut o2) = (vec![0.0f32; k], vec![0.0f32; k]);
+        type One = unsafe extern "C" fn(
+            *const mlmap_table_t,
+            *const f32,
+            usize,
+            f32,
+            *mut f32,
+            usize,
+        ) -> mlmap_status_t;
+        let heads: [One; 4] = [mlmap_ml, mlmap_map, mlmap_bayes, mlmap_open];
+        for f in heads {
+            // SAFETY: two decoded tables, K logits and K scores each.
+            let (r1, r2) = unsafe {
+                (
+                    f(handle, x.as_ptr(), k, 0.5, o1.as_mut_ptr(), k),
+                    f(t, x.as_ptr(), k, 0.5, o2.as_mut_ptr(), k),
+                )
+            };
+            assert_eq!(r1, r2);
+            if r1 == MLMAP_OK {
+                let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&o1), bits(&o2));
+            }
+        }
     }
 
     let mut u = Unstructured::new(calls);

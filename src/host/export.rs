@@ -17,6 +17,7 @@ use std::vec::Vec;
 
 use crate::host::escape::c_comment;
 use crate::host::DynTable;
+use crate::lent;
 use crate::DecodeError;
 
 /// Why a table could not be exported.
@@ -321,6 +322,10 @@ pub fn c_header(bytes: &[u8], name: &str, source: &str) -> Result<String, Export
         None => bayes,
     };
     let source = c_comment(source);
+    let (arena_a, arena_b) = lent::StorageShape::of(bytes, |_| Ok(()))
+        .ok()
+        .and_then(|s| lent::ArenaLayout::size_terms(&s))
+        .ok_or(ExportError::Table(crate::DecodeError::Malformed))?;
     let mut h = String::with_capacity(len * 6 + 2048);
     let guard = format!("{upper}_H");
     let imp = format!("{upper}_IMPLEMENTATION");
@@ -350,10 +355,24 @@ pub fn c_header(bytes: &[u8], name: &str, source: &str) -> Result<String, Export
          #ifndef {guard}\n\
          #define {guard}\n\
          \n\
+         #include <stddef.h>\n\
          #include <stdint.h>\n\
          \n\
          /** Length of {name} in bytes. */\n\
          #define {upper}_LEN {len}u\n\
+         \n\
+         /** Bytes of arena mlmap_table_init() needs for this table, exactly, on a target\n\
+          * with 4- or 8-byte pointers (arena layout {layout}). */\n\
+         #define {upper}_ARENA_SIZE ((size_t){arena_a} + (size_t){arena_b} * sizeof(void *))\n\
+         /** The arena layout {upper}_ARENA_SIZE is for. */\n\
+         #define {upper}_ARENA_LAYOUT {layout}\n\
+         /* A header of another arena layout than this size's fails the build (include\n\
+          * mlmap.h first for the check). */\n\
+         #if defined(MLMAP_ARENA_LAYOUT) && MLMAP_ARENA_LAYOUT != {upper}_ARENA_LAYOUT\n\
+         #error \"{name}: written by mlmap export-c for another arena layout than mlmap.h's\"\n\
+         #endif\n\
+         /* The size holds for 4- and 8-byte pointers only. */\n\
+         typedef char {name}_arena_pointer_check[(sizeof(void *) == 4 || sizeof(void *) == 8) ? 1 : -1];\n\
          \n\
          #ifdef __cplusplus\n\
          extern \"C\" {{\n\
@@ -390,6 +409,7 @@ pub fn c_header(bytes: &[u8], name: &str, source: &str) -> Result<String, Export
         bins_ml = table.bins_ml(),
         bins_map = table.bins_map(),
         align = C_ARRAY_ALIGN,
+        layout = lent::ARENA_LAYOUT,
     );
     for row in bytes.chunks(12) {
         h.push_str("   ");
@@ -418,6 +438,22 @@ mod tests {
             .filter(|s| !s.is_empty())
             .map(|s| u8::from_str_radix(s.trim_start_matches("0x"), 16).unwrap())
             .collect()
+    }
+
+    #[test]
+    fn header_holds_the_arena_size_for_both_pointer_sizes() {
+        let h = c_header(SHIPPED, "calib_table", "default.mlmap").unwrap();
+        let shape = lent::StorageShape::of(SHIPPED, |_| Ok(())).unwrap();
+        let (a, b) = lent::ArenaLayout::size_terms(&shape).unwrap();
+        for p in [4, 8] {
+            assert_eq!(a + b * p, lent::ArenaLayout::new(&shape, p).unwrap().size);
+        }
+        assert!(h.contains(&format!(
+            "#define CALIB_TABLE_ARENA_SIZE ((size_t){a} + (size_t){b} * sizeof(void *))\n"
+        )));
+        assert!(h.contains("#define CALIB_TABLE_ARENA_LAYOUT 1\n"));
+        // A 3-class table with a Bayes head: well under 4 KB on a 32-bit target.
+        assert!(a + 4 * b <= 4096, "{}", a + 4 * b);
     }
 
     #[test]

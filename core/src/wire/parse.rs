@@ -46,6 +46,12 @@ pub(crate) trait BodySink<'a> {
     /// Where the knots of the recalibration map in slot `slot` (ML, MAP, Bayes, open)
     /// go; knots beyond its length are counted, not stored.
     fn recal(&mut self, slot: usize) -> &mut [Knot];
+    /// Whether the elements of every sequence beyond the room the sink lends are counted
+    /// rather than refused: a sink that only measures a table (lends no room at all).
+    /// Every sink that stores a table answers `false`.
+    fn counts_only(&self) -> bool {
+        false
+    }
 }
 
 /// The storage a Bayes head is parsed into (axes get their `lo` and `hi` only).
@@ -117,16 +123,20 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
         .map_err(malformed)?;
     let bayes = if bayes {
         let lambda = f32::deserialize(&mut de).map_err(malformed)?;
+        let count = sink.counts_only();
         let slots = sink.bayes();
         let rows = seq_into(slots.rows, |slot: &mut u64, v: u64| *slot = v)
+            .counting(count)
             .deserialize(&mut de)
             .map_err(malformed)?;
         let axes = seq_into(slots.axes, |slot: &mut Axis, (lo, hi): (f32, f32)| {
             (slot.lo, slot.hi) = (lo, hi);
         })
+        .counting(count)
         .deserialize(&mut de)
         .map_err(malformed)?;
         let terms = seq_into(slots.terms, store)
+            .counting(count)
             .deserialize(&mut de)
             .map_err(malformed)?;
         Some((lambda, [rows, axes, terms]))
@@ -333,12 +343,22 @@ impl<'de> Visitor<'de> for CountInto<'_> {
 }
 
 /// A sequence of `V`, stored through `set` into the slots of a slice; its value is the
-/// length of the sequence. A sequence longer than the slice is an error.
-struct SeqInto<'s, T, V, F>(&'s mut [T], F, core::marker::PhantomData<fn() -> V>);
+/// length of the sequence. A sequence longer than the slice is an error, unless the
+/// sequence is only counted (`counting`: the elements beyond the slice are parsed and
+/// counted, not stored).
+struct SeqInto<'s, T, V, F>(&'s mut [T], F, bool, core::marker::PhantomData<fn() -> V>);
 
 /// A [`SeqInto`] storing each parsed `V` into a slot of `slots` through `set`.
 fn seq_into<T, V, F: FnMut(&mut T, V)>(slots: &mut [T], set: F) -> SeqInto<'_, T, V, F> {
-    SeqInto(slots, set, core::marker::PhantomData)
+    SeqInto(slots, set, false, core::marker::PhantomData)
+}
+
+impl<T, V, F> SeqInto<'_, T, V, F> {
+    /// Counts the elements beyond the slice instead of refusing them when `count`.
+    fn counting(mut self, count: bool) -> Self {
+        self.2 = count;
+        self
+    }
 }
 
 impl<'de, T, V: Deserialize<'de>, F: FnMut(&mut T, V)> DeserializeSeed<'de>
@@ -359,14 +379,15 @@ impl<'de, T, V: Deserialize<'de>, F: FnMut(&mut T, V)> Visitor<'de> for SeqInto<
     }
 
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
-        let SeqInto(slots, mut set, _) = self;
-        let mut n = 0;
+        let SeqInto(slots, mut set, count, _) = self;
+        let mut n = 0usize;
         while let Some(v) = seq.next_element::<V>()? {
             match slots.get_mut(n) {
                 Some(slot) => set(slot, v),
+                None if count => {}
                 None => return Err(A::Error::invalid_length(n + 1, &"a shorter sequence")),
             }
-            n += 1;
+            n = n.saturating_add(1);
         }
         Ok(n)
     }
@@ -451,12 +472,17 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for ClassSeed<'_, S> {
             .ok_or_else(|| A::Error::invalid_length(1, &"a class"))?;
         let (mean, variance) = (next(&mut seq)?, next(&mut seq)?);
         let ml_range = (next(&mut seq)?, next(&mut seq)?);
+        let count = self.sink.counts_only();
         let ml_len = seq
-            .next_element_seed(seq_into(self.sink.freqs(self.class, Head::Ml), store))?
+            .next_element_seed(
+                seq_into(self.sink.freqs(self.class, Head::Ml), store).counting(count),
+            )?
             .ok_or_else(|| A::Error::invalid_length(6, &"a class"))?;
         let map_range = (next(&mut seq)?, next(&mut seq)?);
         let map_len = seq
-            .next_element_seed(seq_into(self.sink.freqs(self.class, Head::Map), store))?
+            .next_element_seed(
+                seq_into(self.sink.freqs(self.class, Head::Map), store).counting(count),
+            )?
             .ok_or_else(|| A::Error::invalid_length(9, &"a class"))?;
         self.sink.class(
             self.class,
