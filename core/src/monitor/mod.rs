@@ -448,39 +448,3 @@ impl<'s, const K: usize, const B: usize, const C: usize> Monitor<'s, K, B, C> {
         Some((below, self.bins.get(j)?, above))
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ln_matches_libm() {
-        let mut worst = 0.0f64;
-        let mut x = 1.0e-10f32;
-        while x < 4.0 {
-            let exact = (x as f64).ln();
-            let got = ln(x) as f64;
-            let err = if exact.abs() > 1e-3 {
-                ((got - exact) / exact).abs()
-            } else {
-                (got - exact).abs()
-            };
-            worst = worst.max(err);
-            x *= 1.000_37;
-        }
-        assert!(worst < 2e-7, "worst error {worst}");
-        assert_eq!(ln(1.0), 0.0);
-    }
-
-    #[test]
-    fn term_is_zero_at_the_floor_and_positive_elsewhere() {
-        let n = 200u32;
-        let inv = 1.0 / n as f32;
-        let floor = 0.5 * inv;
-        assert_eq!(term(0, 0.0, inv, floor), 0.0);
-        assert_eq!(term(0, floor * 0.5, inv, floor), 0.0);
-        assert!(term(0, 0.1, inv, floor) > 0.0);
-        assert!(term(20, 0.1, inv, floor).abs() < 1e-7);
-        assert!(term(40, 0.1, inv, floor) > 0.0);
-    }
-}
