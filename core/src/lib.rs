@@ -56,6 +56,7 @@ mod fastmath;
 mod gaussian;
 mod histogram;
 mod layer;
+pub mod lidar;
 mod math;
 mod monitor;
 mod name;
