@@ -94,11 +94,8 @@ pub fn upsample(
             *g = (1.0 / (1.0 + libm::sqrt(d2))) as f32;
         }
     }
-    let mut window = Window {
-        seg: [&[]; MAX_MASK],
-        lo: [0; MAX_MASK],
-        hi: [0; MAX_MASK],
-    };
+    let table: &[f32] = table;
+    let mut cursors = [EMPTY; MAX_MASK];
     for (row0, (rout, fout)) in range
         .chunks_exact_mut(width)
         .zip(reflectance.chunks_exact_mut(width))
@@ -106,8 +103,11 @@ pub fn upsample(
     {
         let first = row0.saturating_sub(h);
         let rows = (row0 + h).min(height - 1) + 1 - first;
-        window.start(pixels, first, rows);
-        let centre = window.seg.get(row0 - first).copied().unwrap_or(&[]);
+        let active = start(&mut cursors, pixels, table, side, first, rows, row0);
+        let centre = active
+            .iter()
+            .find(|c| c.row == row0)
+            .map_or(&[][..], |c| c.seg);
         let mut at = 0usize; // the centre row's first point at or right of col0
         for (col0, (ro, fo)) in rout.iter_mut().zip(fout.iter_mut()).enumerate() {
             while centre.get(at).is_some_and(|p| usize::from(p.col) < col0) {
@@ -117,25 +117,31 @@ pub fn upsample(
                 (*ro, *fo) = (p.range, p.reflectance);
                 continue;
             }
-            window.slide(col0, h, rows);
             let mut n = 0usize;
             let mut nearest = (usize::MAX, 0usize);
-            for (k, seg) in window.seg.iter().take(rows).enumerate() {
-                let dy = (first + k).abs_diff(row0);
-                let trow = table.get(dy * side..(dy + 1) * side).unwrap_or(&[]);
-                let (lo, hi) = (window.lo.get(k), window.hi.get(k));
-                let pts = match (lo, hi) {
-                    (Some(&lo), Some(&hi)) => seg.get(lo..hi).unwrap_or(&[]),
-                    _ => &[],
-                };
-                for p in pts {
+            for c in active.iter_mut() {
+                while c
+                    .seg
+                    .get(c.lo)
+                    .is_some_and(|p| usize::from(p.col) + h < col0)
+                {
+                    c.lo += 1;
+                }
+                while c
+                    .seg
+                    .get(c.hi)
+                    .is_some_and(|p| usize::from(p.col) <= col0 + h)
+                {
+                    c.hi += 1;
+                }
+                for p in c.seg.get(c.lo..c.hi).unwrap_or(&[]) {
                     let dx = usize::from(p.col).abs_diff(col0);
-                    let d2 = dx * dx + dy * dy;
+                    let d2 = dx * dx + c.dy2;
                     if d2 < nearest.0 {
                         nearest = (d2, n);
                     }
                     if let (Some(g), Some(r), Some(f), Some(&t)) =
-                        (gs.get_mut(n), rv.get_mut(n), fv.get_mut(n), trow.get(dx))
+                        (gs.get_mut(n), rv.get_mut(n), fv.get_mut(n), c.trow.get(dx))
                     {
                         (*g, *r, *f) = (t, p.range, p.reflectance);
                         n += 1;
@@ -147,87 +153,158 @@ pub fn upsample(
                 rv.get(..n).unwrap_or(&[]),
                 fv.get(..n).unwrap_or(&[]),
             );
-            *ro = filter(g, r, r0, nearest.1);
-            *fo = filter(g, f, r0, nearest.1);
+            (*ro, *fo) = filter(g, r, f, r0, nearest.1);
         }
     }
     Ok(())
 }
 
-/// The rows of the mask: each a slice of the list, and the cursors of the points within
-/// `h` columns of the current pixel.
-struct Window<'a> {
-    seg: [&'a [Pixel]; MAX_MASK],
-    lo: [usize; MAX_MASK],
-    hi: [usize; MAX_MASK],
+/// One image row of the mask that holds points: its points, its row of the `G_s`
+/// table, and the cursors of its points within `h` columns of the current pixel.
+#[derive(Clone, Copy)]
+struct Cursor<'a> {
+    seg: &'a [Pixel],
+    trow: &'a [f32],
+    row: usize,
+    dy2: usize,
+    lo: usize,
+    hi: usize,
 }
 
-impl<'a> Window<'a> {
-    /// The `rows` image rows from `first`, cursors at their start.
-    fn start(&mut self, pixels: &'a [Pixel], first: usize, rows: usize) {
-        let mut from = pixels.partition_point(|p| usize::from(p.row) < first);
-        for (k, ((seg, lo), hi)) in self
-            .seg
-            .iter_mut()
-            .zip(&mut self.lo)
-            .zip(&mut self.hi)
-            .enumerate()
-        {
-            if k >= rows {
-                break;
-            }
-            let rest = pixels.get(from..).unwrap_or(&[]);
-            let len = rest.partition_point(|p| usize::from(p.row) <= first + k);
-            *seg = rest.get(..len).unwrap_or(&[]);
-            (*lo, *hi) = (0, 0);
-            from += len;
+/// A cursor over no points.
+const EMPTY: Cursor<'static> = Cursor {
+    seg: &[],
+    trow: &[],
+    row: 0,
+    dy2: 0,
+    lo: 0,
+    hi: 0,
+};
+
+/// The cursors of the image rows `first..first + rows` that hold a point, around the
+/// pixel row `row0`, at the start of their rows.
+fn start<'a, 'c>(
+    cursors: &'c mut [Cursor<'a>; MAX_MASK],
+    pixels: &'a [Pixel],
+    table: &'a [f32],
+    side: usize,
+    first: usize,
+    rows: usize,
+    row0: usize,
+) -> &'c mut [Cursor<'a>] {
+    let mut from = pixels.partition_point(|p| usize::from(p.row) < first);
+    let mut n = 0;
+    for row in first..first + rows {
+        let rest = pixels.get(from..).unwrap_or(&[]);
+        let len = rest.partition_point(|p| usize::from(p.row) <= row);
+        from += len;
+        if len == 0 {
+            continue;
+        }
+        let dy = row.abs_diff(row0);
+        if let Some(c) = cursors.get_mut(n) {
+            *c = Cursor {
+                seg: rest.get(..len).unwrap_or(&[]),
+                trow: table.get(dy * side..(dy + 1) * side).unwrap_or(&[]),
+                row,
+                dy2: dy * dy,
+                lo: 0,
+                hi: 0,
+            };
+            n += 1;
         }
     }
+    cursors.get_mut(..n).unwrap_or(&mut [])
+}
 
-    /// Moves the cursors to the points with `|col − col0| ≤ h`.
-    fn slide(&mut self, col0: usize, h: usize, rows: usize) {
-        for ((seg, lo), hi) in self
-            .seg
-            .iter()
-            .zip(&mut self.lo)
-            .zip(&mut self.hi)
-            .take(rows)
-        {
-            while seg.get(*lo).is_some_and(|p| usize::from(p.col) + h < col0) {
-                *lo += 1;
-            }
-            while seg.get(*hi).is_some_and(|p| usize::from(p.col) <= col0 + h) {
-                *hi += 1;
-            }
-        }
+/// Lanes of the partial sums: four, so that the loops vectorise.
+const LANES: usize = 4;
+
+/// `Σ a·b` and `Σ a·c` style sums in [`LANES`] interleaved partial sums, then added.
+#[derive(Clone, Copy)]
+struct Acc([f32; LANES]);
+
+impl Acc {
+    fn total(self) -> f32 {
+        let [a, b, c, d] = self.0;
+        (a + b) + (c + d)
     }
 }
 
-/// The filter at one pixel from its mask's points (`G_s` and values, same order): 0
-/// without points, else `r̂₀` clamped to the points' range of values.
-fn filter(gs: &[f32], v: &[f32], r0: R0, nearest: usize) -> f32 {
-    if v.is_empty() {
-        return 0.0;
+/// The filter at one pixel for both maps, from its mask's points (`G_s`, ranges and
+/// reflectances, same order): 0 without points, else each `r̂₀` clamped to its points'
+/// range of values. Sums run in [`LANES`] interleaved partial sums.
+fn filter(gs: &[f32], rv: &[f32], fv: &[f32], r0: R0, nearest: usize) -> (f32, f32) {
+    if gs.is_empty() {
+        return (0.0, 0.0);
     }
-    let (mut sg, mut sgv) = (0.0f32, 0.0f32);
-    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for (&g, &x) in gs.iter().zip(v) {
-        sg += g;
-        sgv += g * x;
-        lo = lo.min(x);
-        hi = hi.max(x);
+    let (mut sg, mut sgr, mut sgf) = (Acc([0.0; LANES]), Acc([0.0; LANES]), Acc([0.0; LANES]));
+    let mut lo = [f32::INFINITY; 2];
+    let mut hi = [f32::NEG_INFINITY; 2];
+    let lanes = |k: usize| k % LANES;
+    for (k, ((&g, &r), &f)) in gs.iter().zip(rv).zip(fv).enumerate() {
+        let l = lanes(k);
+        if let (Some(a), Some(b), Some(c)) = (sg.0.get_mut(l), sgr.0.get_mut(l), sgf.0.get_mut(l)) {
+            *a += g;
+            *b += g * r;
+            *c += g * f;
+        }
+        lo = [lo[0].min(r), lo[1].min(f)];
+        hi = [hi[0].max(r), hi[1].max(f)];
     }
-    let r0 = match r0 {
-        R0::GsMean => sgv / sg,
-        R0::Nearest => v.get(nearest).copied().unwrap_or(0.0),
+    let (r0r, r0f) = match r0 {
+        R0::GsMean => {
+            let sg = sg.total();
+            (sgr.total() / sg, sgf.total() / sg)
+        }
+        R0::Nearest => (
+            rv.get(nearest).copied().unwrap_or(0.0),
+            fv.get(nearest).copied().unwrap_or(0.0),
+        ),
     };
-    let (mut sw, mut swv) = (0.0f32, 0.0f32);
-    for (&g, &x) in gs.iter().zip(v) {
-        let w = g / (1.0 + (r0 - x).abs());
-        sw += w;
-        swv += w * x;
+    let (mut swr, mut swrv) = (Acc([0.0; LANES]), Acc([0.0; LANES]));
+    let (mut swf, mut swfv) = (Acc([0.0; LANES]), Acc([0.0; LANES]));
+    let mut chunks = gs
+        .chunks_exact(LANES)
+        .zip(rv.chunks_exact(LANES))
+        .zip(fv.chunks_exact(LANES));
+    for ((g, r), f) in &mut chunks {
+        for l in 0..LANES {
+            if let (Some(&g), Some(&r), Some(&f)) = (g.get(l), r.get(l), f.get(l)) {
+                let wr = g / (1.0 + (r0r - r).abs());
+                let wf = g / (1.0 + (r0f - f).abs());
+                if let (Some(a), Some(b), Some(c), Some(d)) = (
+                    swr.0.get_mut(l),
+                    swrv.0.get_mut(l),
+                    swf.0.get_mut(l),
+                    swfv.0.get_mut(l),
+                ) {
+                    *a += wr;
+                    *b += wr * r;
+                    *c += wf;
+                    *d += wf * f;
+                }
+            }
+        }
     }
-    let out = swv / sw;
-    // NaN cannot occur (every weight is positive and normal); `max` would pick `lo`.
-    out.max(lo).min(hi)
+    let done = gs.len() - gs.len() % LANES;
+    for (l, ((&g, &r), &f)) in gs.iter().zip(rv).zip(fv).skip(done).enumerate() {
+        let wr = g / (1.0 + (r0r - r).abs());
+        let wf = g / (1.0 + (r0f - f).abs());
+        if let (Some(a), Some(b), Some(c), Some(d)) = (
+            swr.0.get_mut(l),
+            swrv.0.get_mut(l),
+            swf.0.get_mut(l),
+            swfv.0.get_mut(l),
+        ) {
+            *a += wr;
+            *b += wr * r;
+            *c += wf;
+            *d += wf * f;
+        }
+    }
+    // Every weight is positive and normal, so no NaN; the clamp only undoes rounding.
+    let out_r = (swrv.total() / swr.total()).max(lo[0]).min(hi[0]);
+    let out_f = (swfv.total() / swf.total()).max(lo[1]).min(hi[1]);
+    (out_r, out_f)
 }
