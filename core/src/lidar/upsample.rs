@@ -23,7 +23,8 @@ pub enum R0 {
 /// the gathered points, `(h + 1)² + 3 mask²` with `h = (mask − 1) / 2`.
 pub const fn scratch_len(mask: usize) -> usize {
     let h = mask / 2 + 1;
-    h * h + 3 * mask * mask
+    let area = mask.saturating_mul(mask);
+    h.saturating_mul(h).saturating_add(area.saturating_mul(3))
 }
 
 /// Checks that the list is inside the image, strictly row-major and has valid values.
@@ -51,8 +52,11 @@ fn check_pixels(pixels: &[Pixel], width: usize, height: usize) -> Result<(), Lid
 /// pixels keep their values, every other pixel gets the bilateral filter of the
 /// `mask × mask` window centred on it, 0 when no point is in it.
 ///
-/// The images may be the sparse maps the list was collected from. Time is bounded by
-/// `O(width · height · mask + pixels)`; `scratch` needs [`scratch_len`]`(mask)` values.
+/// The images may be the sparse maps the list was collected from. Time is bounded: each
+/// pixel without a point moves at most `mask` row cursors and visits at most `mask²`
+/// points, `O(width · height · mask²)` in the worst case (a dense list) and about
+/// `width · height · (mask + points per mask)` in practice; `scratch` needs
+/// [`scratch_len`]`(mask)` values.
 ///
 /// # Errors
 /// A bad image size, buffer length, mask side or scratch length, or a list that is not
