@@ -88,7 +88,7 @@ fn mul(a: &[[f64; 4]; 3], b: &[[f64; 4]; 4]) -> [[f64; 4]; 3] {
         for (j, oj) in o.iter_mut().enumerate() {
             let mut s = 0.0;
             for (aik, bk) in ar.iter().zip(b) {
-                s += aik * bk[j];
+                s += aik * bk.get(j).copied().unwrap_or(0.0);
             }
             *oj = s;
         }
@@ -341,11 +341,11 @@ pub fn collect_pixels(
 ) -> Result<usize, LidarError> {
     check_images(width, height, range.len(), reflectance.len())?;
     let mut n = 0usize;
-    for (row, (rr, fr)) in range
-        .chunks_exact(width)
-        .zip(reflectance.chunks_exact(width))
-        .enumerate()
-    {
+    for row in 0..height {
+        let cols = row * width..(row + 1) * width;
+        let (Some(rr), Some(fr)) = (range.get(cols.clone()), reflectance.get(cols)) else {
+            break;
+        };
         for (col, (&r, &f)) in rr.iter().zip(fr).enumerate() {
             if r > 0.0 {
                 if let Some(p) = out.get_mut(n) {

@@ -359,7 +359,11 @@ fn lidar_maps() -> u32 {
     let mut pixels = [Pixel::default(); 4];
     let mut scratch = [0.0f32; lidar::scratch_len(5)];
     let proj = calib.projection();
-    let buffers = (&mut range[..black_box(128)], &mut refl[..black_box(128)]);
+    let len = black_box(128usize);
+    let (Some(r), Some(f)) = (range.get_mut(..len), refl.get_mut(..len)) else {
+        return 1;
+    };
+    let buffers = (r, f);
     let n = match lidar::project(&points, &proj, w, h, buffers.0, buffers.1)
         .and_then(|_| lidar::collect_pixels(buffers.0, buffers.1, w, h, &mut pixels))
     {

@@ -74,7 +74,7 @@ pub fn upsample(
     reflectance: &mut [f32],
 ) -> Result<(), LidarError> {
     check_images(width, height, range.len(), reflectance.len())?;
-    if mask % 2 == 0 || mask > MAX_MASK {
+    if mask.is_multiple_of(2) || mask > MAX_MASK {
         return Err(LidarError::Mask { mask });
     }
     let needed = scratch_len(mask);
@@ -92,7 +92,7 @@ pub fn upsample(
     let (gs, rest) = rest.split_at_mut_checked(area).ok_or(bad_scratch)?;
     let (rv, rest) = rest.split_at_mut_checked(area).ok_or(bad_scratch)?;
     let fv = rest.get_mut(..area).ok_or(bad_scratch)?;
-    for (dy, t) in table.chunks_exact_mut(side).enumerate() {
+    for (dy, t) in table.chunks_exact_mut(side.max(1)).enumerate() {
         for (dx, g) in t.iter_mut().enumerate() {
             let d2 = (dx * dx + dy * dy) as f64;
             *g = (1.0 / (1.0 + libm::sqrt(d2))) as f32;
@@ -100,11 +100,13 @@ pub fn upsample(
     }
     let table: &[f32] = table;
     let mut cursors = [EMPTY; MAX_MASK];
-    for (row0, (rout, fout)) in range
-        .chunks_exact_mut(width)
-        .zip(reflectance.chunks_exact_mut(width))
-        .enumerate()
-    {
+    for row0 in 0..height {
+        // Rows by index: a zip of exact chunks would keep a division (its size hint).
+        let cols = row0 * width..(row0 + 1) * width;
+        let (Some(rout), Some(fout)) = (range.get_mut(cols.clone()), reflectance.get_mut(cols))
+        else {
+            break;
+        };
         let first = row0.saturating_sub(h);
         let rows = (row0 + h).min(height - 1) + 1 - first;
         let active = start(&mut cursors, pixels, table, side, first, rows, row0);

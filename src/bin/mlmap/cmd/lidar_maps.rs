@@ -54,7 +54,7 @@ pub struct LidarMapsArgs {
 }
 
 pub fn run(a: &LidarMapsArgs) -> Result<()> {
-    if a.mask % 2 == 0 || a.mask > MAX_MASK {
+    if a.mask.is_multiple_of(2) || a.mask > MAX_MASK {
         return Err(CliError::Input(format!(
             "--mask {} is out of range: expected an odd number from 1 to {MAX_MASK}",
             a.mask
