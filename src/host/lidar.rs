@@ -52,7 +52,7 @@ pub fn read_scan(path: &Path) -> Result<Vec<[f32; 4]>, HostError> {
 /// little-endian `f32`. A length that is not a multiple of 16, or a value that is NaN,
 /// infinite or above `1e18` in magnitude, is an error naming `path` and the point.
 pub fn parse_scan(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 4]>, HostError> {
-    if bytes.len() % POINT_BYTES != 0 {
+    if !bytes.len().is_multiple_of(POINT_BYTES) {
         return Err(HostError::input(
             path,
             std::format!(

@@ -112,7 +112,7 @@ pub fn run(a: &LidarMapsArgs) -> Result<()> {
         .map_err(|e| CliError::input(&a.output, format!("cannot create: {e}")))?;
     let (w, h) = (a.width, a.height);
     let mut written = Vec::new();
-    let mut files: Vec<(&str, &[f32], fn(f32) -> u16)> = vec![
+    let mut files: Vec<MapFile<'_>> = vec![
         ("rav", &maps.range, range_to_u16),
         ("rev", &maps.reflectance, reflectance_to_u16),
     ];
@@ -146,6 +146,9 @@ pub fn run(a: &LidarMapsArgs) -> Result<()> {
     }
     output::print(&text)
 }
+
+/// A map to write: its file stem, values and 16-bit scaling (DESIGN §9.4).
+type MapFile<'a> = (&'a str, &'a [f32], fn(f32) -> u16);
 
 /// A library error as the CLI reports it.
 fn lidar_error(velodyne: &Path, e: LidarError) -> CliError {
