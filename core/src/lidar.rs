@@ -10,6 +10,7 @@
 //!    step 1: the list holds the values the filter reads.
 //!
 //! ```
+//! # use mlmap_core as mlmap;
 //! use mlmap::lidar::{self, Calibration, Pixel, R0};
 //!
 //! // A camera one metre behind the LiDAR looking along its x axis (KITTI's axes).
@@ -18,7 +19,7 @@
 //!     r0_rect: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
 //!     tr_velo_to_cam: [[0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -1.0, 0.0], [1.0, 0.0, 0.0, 1.0]],
 //! };
-//! let scan = [[3.0f32, 0.0, 0.0, 0.5], [3.0, -1.5, 0.0, 0.25]];
+//! let scan = [[3.0f32, 0.0, 0.0, 0.5], [3.0, -3.0, 0.0, 0.25]];
 //! let (w, h) = (5, 5);
 //! let mut range = [0.0f32; 25];
 //! let mut refl = [0.0f32; 25];
@@ -29,7 +30,8 @@
 //! assert_eq!(range[2 * w + 2], 3.0); // the first point lands at the centre
 //! let mut scratch = [0.0f32; lidar::scratch_len(3)];
 //! lidar::upsample(&pixels[..n], w, h, 3, R0::GsMean, &mut scratch, &mut range, &mut refl)?;
-//! assert!(range[2 * w + 3] > 3.0 && range[2 * w + 3] < 3.0f32.hypot(1.5));
+//! assert_eq!(range[2 * w + 4], 3.0f32.hypot(3.0)); // the second, two pixels right
+//! assert!(range[2 * w + 3] > 3.0 && range[2 * w + 3] < 3.0f32.hypot(3.0)); // filled
 //! assert_eq!(range[0], 0.0); // no point within the 3 x 3 mask: no data
 //! # Ok::<(), lidar::LidarError>(())
 //! ```
