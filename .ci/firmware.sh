@@ -37,6 +37,7 @@ if ! python3 -c 'import numpy' 2>/dev/null; then
     python3 -m pip install --quiet numpy
 fi
 python3 tools/firmware_expected.py --check
+python3 tools/lidar_goldens.py --check
 
 section "toolchain for $THUMB_TARGET"
 thumb_acquire

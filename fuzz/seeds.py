@@ -14,6 +14,8 @@ roundtrip: the shipped table's statistics, small tables, and small tables with a
 quantized: mode 0 (a section): the int8 section of tables/default_q8.mlmap, the whole
            file, and the section truncated; mode 1 (build one): int8 and int16
            quantizations of the shipped table with a few codes.
+lidar:     a velodyne scan (first byte even) and calibration files (odd): the golden
+           small frame's, truncated, one without Tr_velo_to_cam.
 csv:       the example of DESIGN §2, the head of examples/data/test.csv, malformed files.
 infer:     detections on the shipped table (rows of examples/data/test.csv, NaN, ±inf,
            subnormals, bin edges, objectness at and beyond its bounds), on the shipped
@@ -429,6 +431,19 @@ def main():
     )
     write("csv", "malformed.csv", b"label,car,cyclist\ncar,1e3,-inf\n,NaN,0\ncyclist,1.5\n")
     write("csv", "bad_values.csv", b"label,objectness,car,cyclist\ncar,1.5,1,2\ntruck,0.5,1,2\n")
+
+    # lidar: byte 0 even, a velodyne scan (the golden frame's first 64 points, and a
+    # truncated one); odd, a calibration file (the golden one, and one missing a matrix)
+    golden = os.path.join(ROOT, "tests", "golden", "lidar")
+    with open(os.path.join(golden, "small.bin"), "rb") as f:
+        scan = f.read()
+    with open(os.path.join(golden, "small_calib.txt"), "rb") as f:
+        calib = f.read()
+    write("lidar", "scan_small", b"\x00" + scan[: 16 * 64])
+    write("lidar", "scan_truncated", b"\x00" + scan[: 16 * 3 + 7])
+    write("lidar", "calib_small", b"\x01" + calib)
+    write("lidar", "calib_missing",
+          b"\x01P2: 1 0 0 0 0 1 0 0 0 0 1 0\nR0_rect: 1 0 0 0 1 0 0 0 1\n")
 
 
 if __name__ == "__main__":

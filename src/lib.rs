@@ -69,6 +69,8 @@
 extern crate std;
 
 pub use mlmap_core::baseline;
+/// LiDAR range-view and reflectance-view maps (docs/DESIGN.md §9).
+pub use mlmap_core::lidar;
 pub use mlmap_core::{
     argmax, check_class_name, check_class_names, decide, objectness_logit, refused_char,
     scores_from_evidence, Axis, Backend, BatchError, BayesView, Bounded, BoundedTable, CharKind,

@@ -64,3 +64,8 @@ mod monitor;
 /// empty-set properties.
 #[cfg(feature = "std")]
 mod conformal;
+
+/// The LiDAR maps (DESIGN §9) against the numpy reference; the filter's properties;
+/// the scan, calibration and label readers' errors.
+#[cfg(feature = "std")]
+mod lidar;

@@ -59,6 +59,7 @@ mod gaussian;
 mod histogram;
 mod layer;
 pub mod lent;
+pub mod lidar;
 mod math;
 mod monitor;
 mod name;

@@ -318,11 +318,75 @@ fn run() -> u32 {
     failed += u32::from(decoded.ml_batch(&logits, Some(&os[..3]), &mut out).is_ok());
     black_box(&out);
 
+    failed += lidar_maps();
+
     #[cfg(feature = "canary")]
     {
         // A bounds check the optimiser cannot remove: the link must fail.
         failed += u32::from(TABLE_BYTES[black_box(usize::MAX)]);
     }
+    failed
+}
+
+/// The LiDAR maps (DESIGN §9): projection, the pixel list and the upsampling of a
+/// 16 x 8 frame with opaque sizes, mask and buffers; returns the failed checks.
+fn lidar_maps() -> u32 {
+    use mlmap::lidar::{self, Calibration, Pixel, R0};
+    let mut failed = 0;
+    // A camera looking along the LiDAR's x axis, focal length 4 px, centre (8, 4).
+    let calib = black_box(Calibration {
+        p2: [
+            [4.0, 0.0, 8.0, 0.0],
+            [0.0, 4.0, 4.0, 0.0],
+            [0.0, 0.0, 1.0, 0.0],
+        ],
+        r0_rect: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        tr_velo_to_cam: [
+            [0.0, -1.0, 0.0, 0.0],
+            [0.0, 0.0, -1.0, 0.0],
+            [1.0, 0.0, 0.0, 0.0],
+        ],
+    });
+    let points: [[f32; 4]; 4] = black_box([
+        [4.0, 0.0, 0.0, 0.5],
+        [4.0, 2.0, 0.0, 0.25],
+        [-4.0, 0.0, 0.0, 1.0],
+        [8.0, -4.0, 2.0, 0.75],
+    ]);
+    let (w, h, mask) = black_box((16usize, 8usize, 5usize));
+    let mut range = [0.0f32; 128];
+    let mut refl = [0.0f32; 128];
+    let mut pixels = [Pixel::default(); 4];
+    let mut scratch = [0.0f32; lidar::scratch_len(5)];
+    let proj = calib.projection();
+    let len = black_box(128usize);
+    let (Some(r), Some(f)) = (range.get_mut(..len), refl.get_mut(..len)) else {
+        return 1;
+    };
+    let buffers = (r, f);
+    let n = match lidar::project(&points, &proj, w, h, buffers.0, buffers.1)
+        .and_then(|_| lidar::collect_pixels(buffers.0, buffers.1, w, h, &mut pixels))
+    {
+        Ok(n) => n,
+        Err(_) => return 1,
+    };
+    failed += u32::from(n != 3);
+    let list = pixels.get(..n).unwrap_or(&[]);
+    let r0 = black_box(R0::GsMean);
+    match lidar::upsample(list, w, h, mask, r0, &mut scratch, buffers.0, buffers.1) {
+        // The centre keeps its point; its right neighbour lies between its mask's two
+        // points (ranges 4 and sqrt(84)).
+        Ok(()) => {
+            let c = buffers.0.get(black_box(4 * 16 + 8)).copied();
+            let right = buffers.0.get(black_box(4 * 16 + 9)).copied().unwrap_or(0.0);
+            failed += u32::from(c != Some(4.0) || !(right > 4.0 && right < 9.17));
+            failed += u32::from(lidar::range_to_u16(c.unwrap_or(0.0)) != 1024);
+        }
+        Err(_) => failed += 1,
+    }
+    let bad = black_box(4usize);
+    failed +=
+        u32::from(lidar::upsample(list, w, h, bad, r0, &mut scratch, buffers.0, buffers.1).is_ok());
     failed
 }
 

@@ -21,6 +21,7 @@ pub mod escape;
 pub mod eval;
 pub mod export;
 pub mod fit;
+pub mod lidar;
 pub mod metrics;
 pub mod monitor;
 pub mod names;

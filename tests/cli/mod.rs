@@ -78,6 +78,10 @@ mod streams;
 /// `monitor fit` and `monitor`: the numpy reference's thresholds and windows, refusals.
 mod monitor;
 
+/// `lidar-maps`: the maps, PNGs, sparse maps and crops against the numpy reference;
+/// truncated scans, NaN points, broken calibrations and labels refused.
+mod lidar_maps;
+
 /// `conformal`, and the sets in `inspect`, `apply` and `eval`: numpy's thresholds and
 /// sets, the coverage report, refusals.
 mod conformal;

@@ -55,6 +55,8 @@ pub enum Command {
     Monitor(crate::cmd::monitor::MonitorArgs),
     /// Fit the thresholds of conformal class sets on labelled rows and write them into a table.
     Conformal(crate::cmd::conformal::ConformalArgs),
+    /// Project a KITTI LiDAR scan into the camera image and write its dense range and reflectance maps.
+    LidarMaps(crate::cmd::lidar_maps::LidarMapsArgs),
 }
 
 /// The fit settings of `fit` and of `stats` (pass a).

@@ -9,6 +9,7 @@ pub mod eval;
 pub mod export_c;
 pub mod fit;
 pub mod inspect;
+pub mod lidar_maps;
 pub mod merge;
 pub mod monitor;
 pub mod quantize;
@@ -33,5 +34,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Quantize(a) => quantize::run(a),
         Command::Monitor(a) => monitor::run(a),
         Command::Conformal(a) => conformal::run(a),
+        Command::LidarMaps(a) => lidar_maps::run(a),
     }
 }
