@@ -30,6 +30,12 @@ def main() -> int:
     text = "\n".join(files.values())
     types = set(re.findall(r"^pub (?:struct|enum) (\w+)", text, flags=re.M))
     exported = exported_names(files[SRC / "lib.rs"]) & types
+    # The public modules (`pub mod x;`): every public type in them is public too.
+    for module in re.findall(r"^pub mod (\w+);", files[SRC / "lib.rs"], flags=re.M):
+        for path, body in files.items():
+            rel = path.relative_to(SRC)
+            if rel == pathlib.Path(f"{module}.rs") or rel.parts[0] == module:
+                exported |= set(re.findall(r"^pub (?:struct|enum) (\w+)", body, flags=re.M))
     formatted = set(re.findall(r"Format for (?:crate::)?(\w+)", text))
     derived = set(
         re.findall(r'derive\(defmt::Format\)\]\s*(?:#\[[^\]]*\]\s*)*pub (?:struct|enum) (\w+)', text)
@@ -38,7 +44,7 @@ def main() -> int:
     errors = sorted(n for n in exported if n.endswith("Error"))
     no_message = []
     for name in errors:
-        if not re.search(r"impl %s \{[^}]*?pub const fn message\(self\)" % name, text, flags=re.S):
+        if not re.search(r"impl %s \{[^}]*?pub const fn message\(&?self\)" % name, text, flags=re.S):
             no_message.append(name)
     for name in missing:
         print(f"check_defmt: {name} is exported by mlmap-core and has no defmt::Format impl")

@@ -34,6 +34,8 @@ mod conformal;
 mod defmt_impls;
 #[cfg(feature = "defmt")]
 mod defmt_sections;
+#[cfg(feature = "defmt")]
+mod defmt_storage;
 #[cfg(feature = "alloc")]
 mod dyn_table;
 #[doc(hidden)]
