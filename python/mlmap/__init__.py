@@ -45,6 +45,15 @@ whose column names are the class names (``Table.classes``), and labels as class 
 (``"background"`` for background rows) as well as integers; an unknown name raises
 ``ValueError``. pandas itself is optional (never imported by mlmap).
 
+Evaluation in bounded memory: ``Evaluator(table)`` takes rows shard by shard
+(``update``), merges (``merge``, ``+``, ``sum()``), pickles (Dask, multiprocessing) and
+gives ``evaluate``'s report (``report()``); ``report_frame(report)`` is a report as a
+pandas DataFrame (a row per method).
+
+Quantized logits: ``Table.quantized_scores(head, codes, objectness)`` scores int8 or
+int16 codes through the table file's quantized section (``mlmap quantize``), as
+``mlmap apply --quantized``.
+
 Size: ``fit`` and ``tune`` warn (``TableSizeWarning``) when the table is larger than
 ``TABLE_SIZE_WARNING`` bytes (1 MiB): the Bayes head grows as ``K * (K + 1)``
 histograms; ``bayes=False`` or fewer Bayes bins shrink it.
@@ -58,6 +67,7 @@ and labels may be class names (``"background"`` for background rows).
 from . import _mlmap
 from ._mlmap import (
     FORMAT_VERSION,
+    Evaluator,
     FitCounts,
     FitEdges,
     FitStats,
@@ -69,7 +79,12 @@ from ._mlmap import (
     conformal_fit,
     monitor_fit,
 )
-from ._frames import TABLE_SIZE_WARNING, TableSizeWarning, accepting_frames as _accepting_frames
+from ._frames import (
+    TABLE_SIZE_WARNING,
+    TableSizeWarning,
+    accepting_frames as _accepting_frames,
+    report_frame,
+)
 from ._calibrator import Calibrator
 
 # DataFrames and class-name labels (`_frames`); signatures and docstrings stay the
@@ -80,6 +95,7 @@ evaluate = _accepting_frames(_mlmap.evaluate)
 
 __all__ = [
     "Calibrator",
+    "Evaluator",
     "FORMAT_VERSION",
     "HEADS",
     "FitCounts",
@@ -96,6 +112,7 @@ __all__ = [
     "fit",
     "monitor_fit",
     "conformal_fit",
+    "report_frame",
     "tune",
 ]
 

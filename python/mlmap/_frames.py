@@ -201,3 +201,19 @@ def accepting_frames(fn: _F) -> _F:
 
     wrapper.__doc__ = (fn.__doc__ or "") + _FRAMES_NOTE
     return wrapper  # type: ignore[return-value]
+
+
+def report_frame(report: Any) -> Any:
+    """A pandas DataFrame of a report of `evaluate` or `Evaluator.report`: a row per
+    method (index `method`), a column per metric (`ece`, `mce`, ..., `ap_<class>`), an
+    undefined metric as NaN. pandas is imported here, and only here."""
+    import pandas as pd  # the one place mlmap needs pandas
+
+    methods = report["methods"]
+    df = pd.DataFrame.from_dict(
+        {m: {k: (float("nan") if v is None else v) for k, v in values.items()}
+         for m, values in methods.items()},
+        orient="index",
+    )
+    df.index.name = "method"
+    return df
