@@ -207,7 +207,7 @@ def report_frame(report: Any) -> Any:
     """A pandas DataFrame of a report of `evaluate` or `Evaluator.report`: a row per
     method (index `method`), a column per metric (`ece`, `mce`, ..., `ap_<class>`), an
     undefined metric as NaN. pandas is imported here, and only here."""
-    import pandas as pd  # the one place mlmap needs pandas
+    import pandas as pd  # type: ignore[import-untyped]  # the one place mlmap needs pandas
 
     methods = report["methods"]
     df = pd.DataFrame.from_dict(

@@ -11,6 +11,7 @@ __all__ = [
     "FitCounts",
     "FitEdges",
     "FitStats",
+    "Evaluator",
     "Monitor",
     "Table",
     "TableError",
@@ -150,6 +151,14 @@ class Table:
         self, head: _HeadName, logits: _Logits, objectness: _Objectness = None
     ) -> npt.NDArray[np.float32]:
         """The scores of `head`, as `ml`."""
+    def quantized_scores(
+        self, head: _HeadName, codes: npt.ArrayLike, objectness: _Objectness = None
+    ) -> npt.NDArray[np.float32]:
+        """`(N, K)` float32 scores of `head` for integer logit codes (int8 for an 8-bit
+        section, int16 for a 16-bit one, or any integer array of codes in range),
+        through the table's quantized section (`mlmap quantize`): those of `mlmap apply
+        --quantized`, bit for bit. No section, a head the section lacks or a code out
+        of range raise `ValueError`; a non-integer array `TypeError`."""
     def recal_map(self, head: _HeadName) -> Optional[List[Tuple[float, float]]]:
         """The recalibration map of `head` as its knots `(x, y)`, or `None` when the
         table holds none for it. Every scoring method applies it: the head's top
@@ -183,6 +192,47 @@ def evaluate(
     `ece_bins` outside `1 .. 2**20` raises `ValueError`. `group_by` (one value per test
     row, taken by `str()`) adds the metrics per value under `"groups"`, as
     `mlmap eval --group-by`."""
+
+@final
+class Evaluator:
+    """The metrics of `evaluate` for every method, accumulated shard by shard in
+    bounded memory: `update` rows, `merge` (or `+`, `sum()`) evaluators of shards in
+    any order, pickle them (Dask, multiprocessing), and `report()`.
+
+    Methods: sigmoid, softmax, temperature (with `temperature=T`) and the table's
+    heads. `ece`, `mce`, `nll`, `brier`, `accuracy`, `tp_*` and `fp_*` equal
+    `evaluate`'s up to the order of floating-point additions; `auroc` and
+    `ap_<class>` count scores within `1 / rank_levels` of each other as tied. Memory:
+    per method `(K + 1) * (rank_levels + 1)` pairs of counts.
+    """
+
+    def __new__(
+        cls,
+        table: Table,
+        *,
+        ece_bins: int = 10,
+        ece_binning: Literal["design", "default", "netcal", "torchmetrics"] = "design",
+        temperature: Optional[float] = None,
+        rank_levels: int = 65536,
+    ) -> "Evaluator": ...
+    def update(self, logits: _Logits, labels: _Labels, objectness: _Objectness = None) -> None:
+        """Adds rows (checked as `evaluate` checks them; an empty shard adds nothing)."""
+    def merge(self, other: "Evaluator") -> "Evaluator":
+        """A new evaluator holding the rows of both."""
+    def __add__(self, other: Union["Evaluator", int], /) -> "Evaluator": ...
+    def __radd__(self, other: Union["Evaluator", int], /) -> "Evaluator": ...
+    @property
+    def rows(self) -> int:
+        """Rows added."""
+    def report(self) -> Dict[str, Any]:
+        """`evaluate`'s dict for the rows added (`"methods"`, `"rows"`, `"classes"`,
+        `"ece_bins"`, `"ece_binning"`, `"rank_levels"`); no rows raise `ValueError`."""
+    def to_bytes(self) -> bytes:
+        """The state as bytes (the table, the settings, every count and sum)."""
+    @staticmethod
+    def from_bytes(data: _Buffer) -> "Evaluator":
+        """Reads `to_bytes`'s output; anything else raises `ValueError`."""
+    def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
 
 #: The `bayes` keyword: `True` (the default head: 22 bins, lambda 1e-3), `False` or
 #: `None` (no Bayes head), or `{"bins": int, "lambda": float}`.
