@@ -14,8 +14,9 @@ use super::{Accumulator, Metrics, MetricsConfig, MetricsError, Parts};
 /// closer than about `1.5e-5` count as tied in `auroc` and `ap_<class>`.
 pub const DEFAULT_RANK_LEVELS: u32 = 1 << 16;
 
-/// Largest accepted number of score levels.
-pub const MAX_RANK_LEVELS: u32 = 1 << 24;
+/// Largest accepted number of score levels, `2^20`: the counts then take 16 MB per
+/// class and method.
+pub const MAX_RANK_LEVELS: u32 = 1 << 20;
 
 const MAGIC: &[u8; 8] = b"MLMAPEVS";
 const WIRE_VERSION: u16 = 1;
@@ -387,4 +388,88 @@ fn pr_points(counts: &Counts, levels: u32) -> Vec<PrPoint> {
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Rows with repeated scores (so levels and exact values rank alike): 3 classes.
+    fn rows() -> Vec<([f64; 3], Option<usize>)> {
+        let values = [0.0, 0.125, 0.25, 0.5, 0.75, 1.0];
+        (0..200usize)
+            .map(|i| {
+                let s = [
+                    values[i % 6] / 2.0,
+                    values[(i / 6) % 6] / 4.0,
+                    values[(i * 7) % 6] / 4.0,
+                ];
+                let label = match i % 5 {
+                    4 => None,
+                    c => Some(c % 3),
+                };
+                (s, label)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn shards_merged_equal_evaluate() {
+        let cfg = MetricsConfig::default();
+        let rows = rows();
+        let scores: Vec<f64> = rows.iter().flat_map(|r| r.0).collect();
+        let labels: Vec<Option<usize>> = rows.iter().map(|r| r.1).collect();
+        let want = super::super::evaluate(&scores, 3, &labels, &cfg).unwrap();
+        let mut total = StreamMetrics::new(3, &cfg, 1 << 10).unwrap();
+        for shard in rows.chunks(37) {
+            let mut s = StreamMetrics::new(3, &cfg, 1 << 10).unwrap();
+            for (x, l) in shard {
+                s.add(x, &[], *l);
+            }
+            let s = StreamMetrics::from_bytes(&s.to_bytes()).unwrap();
+            total.merge(&s).unwrap();
+        }
+        let got = total.report().unwrap();
+        // Scores are multiples of 1/32, on the levels: ranks are exact.
+        assert_eq!(got.auroc, want.auroc);
+        for (g, w) in got.ap.iter().zip(&want.ap) {
+            assert!((g.unwrap() - w.unwrap()).abs() < 1e-12, "{g:?} {w:?}");
+        }
+        assert_eq!(
+            (got.rows, got.labelled, got.tp, got.fp),
+            (200, 160, want.tp, want.fp)
+        );
+        for (g, w) in [
+            (got.ece, want.ece),
+            (got.mce, want.mce),
+            (got.brier, want.brier),
+            (got.nll.unwrap(), want.nll.unwrap()),
+            (got.tp_var.unwrap(), want.tp_var.unwrap()),
+            (got.fp_mean.unwrap(), want.fp_mean.unwrap()),
+        ] {
+            assert!((g - w).abs() < 1e-12, "{g} {w}");
+        }
+    }
+
+    #[test]
+    fn bad_bytes_and_mismatched_merges_are_refused() {
+        let cfg = MetricsConfig::default();
+        let mut s = StreamMetrics::new(3, &cfg, 64).unwrap();
+        s.add(&[0.5, 0.25, 0.25], &[], Some(0));
+        let bytes = s.to_bytes();
+        for cut in [0, 5, 10, bytes.len() - 1] {
+            assert!(StreamMetrics::from_bytes(&bytes[..cut]).is_none());
+        }
+        let mut flipped = bytes.clone();
+        flipped[12] ^= 1;
+        assert!(StreamMetrics::from_bytes(&flipped).is_none());
+        let other = StreamMetrics::new(3, &cfg, 128).unwrap();
+        assert_eq!(s.merge(&other), Err(MetricsError::Shape));
+        assert!(StreamMetrics::new(0, &cfg, 64).is_err());
+        assert!(StreamMetrics::new(3, &cfg, 0).is_err());
+        assert_eq!(
+            StreamMetrics::new(3, &cfg, 8).unwrap().report(),
+            Err(MetricsError::Empty)
+        );
+    }
 }
