@@ -88,7 +88,7 @@ def class_names(logits: Any, classes: Optional[Sequence[str]], what: str = "logi
         return names
     given = [str(c) for c in classes]
     if names is not None and names != given:
-        raise ValueError(f"classes: {given} differ from the {what} DataFrame's columns {names}")
+        raise ValueError(f"classes: {given} differ from the DataFrame's columns {names}")
     return given
 
 
@@ -103,27 +103,21 @@ def same_columns(x: Any, names: Optional[Sequence[str]], what: str) -> Any:
 def labels(y: Any, n: Optional[int], names: Sequence[str], what: str = "labels") -> Any:
     """`y` with class names turned into class indices (`"background"` into -1).
 
-    Integer labels are returned as they are (the extension module checks them); an
-    array of strings or objects is mapped through `names`, an unknown name being a
-    `ValueError` that lists the known ones. Whole-number floats become integers.
+    Integer labels (and anything but strings or objects) are returned as they are:
+    the extension module checks them. An array of strings or objects is mapped through
+    `names`, an unknown name being a `ValueError` that lists the known ones.
     """
     if y is None:
         return None
     if is_dataframe(y):
         raise ValueError(f"{what}: expected one label per row, got a 2-D table")
     a = np.asarray(y)
-    if a.ndim != 1:
+    if a.ndim != 1 or a.dtype.kind not in "USO":
+        # Integers (and anything else) go to the extension module as they are: it
+        # checks them with the messages of the command line.
         return y
     if n is not None and len(a) != n:
-        raise ValueError(f"{what}: {len(a)} labels for {n} rows of logits")
-    if a.dtype.kind in "iu":
-        return a
-    if a.dtype.kind == "f":
-        if not np.all(np.isfinite(a)) or not np.all(a == np.round(a)):
-            raise ValueError(f"{what}: float labels must be whole numbers (class indices)")
-        return a.astype(np.int64)
-    if a.dtype.kind not in "USO":
-        return y
+        raise ValueError(f"{what}: has {len(a)} rows but the logits have {n}")
     index = {c: i for i, c in enumerate(names)}
     index.setdefault(BACKGROUND, -1)
     out = np.empty(len(a), dtype=np.int64)
@@ -142,11 +136,23 @@ def labels(y: Any, n: Optional[int], names: Sequence[str], what: str = "labels")
 
 def _default_names(x: Any) -> List[str]:
     shape = np.shape(values(x))
-    k = shape[1] if len(shape) == 2 else 0
+    k = shape[1] if len(shape) == 2 and shape[1] <= 1 << 16 else 0
     return [f"class{i}" for i in range(k)]
 
 
-def _data_set(obj: Any, names: Sequence[str], what: str) -> Any:
+def _named(y: Any) -> bool:
+    """Whether `y` (labels, or a `(logits, labels, ...)` tuple) holds class names."""
+    if isinstance(y, (tuple, list)) and len(y) >= 2 and not np.isscalar(y[0]):
+        y = y[1]
+    if y is None or is_dataframe(y):
+        return False
+    try:
+        return np.asarray(y).dtype.kind in "USO"
+    except Exception:
+        return False
+
+
+def _data_set(obj: Any, names: Optional[Sequence[str]], what: str) -> Any:
     """A `(logits, labels[, objectness])` tuple or bare logits, converted."""
     if isinstance(obj, (tuple, list)) and 1 <= len(obj) <= 3 and (
         is_dataframe(obj[0]) or hasattr(obj[0], "shape")
@@ -154,7 +160,7 @@ def _data_set(obj: Any, names: Sequence[str], what: str) -> Any:
         parts = list(obj)
         parts[0] = same_columns(parts[0], names, f"{what}.logits")
         if len(parts) > 1:
-            parts[1] = labels(parts[1], None, names, f"{what}.labels")
+            parts[1] = labels(parts[1], None, names or [], f"{what}.labels")
         return tuple(parts)
     return same_columns(obj, names, f"{what}.logits")
 
@@ -183,12 +189,14 @@ def accepting_frames(fn: _F) -> _F:
             names = class_names(x, classes)
             if names is not None:
                 a["classes"] = names
-            else:
-                names = _default_names(x)
         a["logits"] = values(x)
         n = len(a["logits"]) if hasattr(a["logits"], "__len__") else None
+        if names is None and any(_named(a.get(key)) for key in ("labels", "val")):
+            # Class-name labels of array logits without `classes`: the default names
+            # (only then: a shape with absurdly many columns is refused downstream).
+            names = _default_names(a["logits"])
         if "labels" in a:
-            a["labels"] = labels(a["labels"], n, names)
+            a["labels"] = labels(a["labels"], n, names or [])
         for key in ("val", "ood"):
             if a.get(key) is not None:
                 a[key] = _data_set(a[key], names, key)

@@ -49,11 +49,14 @@ impl Sum {
     }
 }
 
+/// One confidence bin as serialized: count, correct, and the sum of confidences.
+type BinWire = (u64, u64, (f64, f64));
+
 /// The serialized state of an [`Accumulator`] (its edges follow from the config).
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(super) struct AccumulatorWire {
     /// Per bin: count, correct, and the sum of confidences.
-    bins: Option<Vec<(u64, u64, (f64, f64))>>,
+    bins: Option<Vec<BinWire>>,
     nll: Option<((f64, f64), u64)>,
     brier: Option<(f64, f64)>,
     rows: u64,
