@@ -40,14 +40,34 @@ Fitting across processes or machines (docs/SCALE.md): ``FitStats`` (pass a) of e
 shard, merged (``+``, ``sum``); its ``edges(...)``; ``FitCounts`` (pass b) of every shard
 over those edges, merged; ``finish(stats, counts)``: the bytes ``fit`` gives on all rows.
 
+pandas: ``fit``, ``tune``, ``evaluate`` and ``Calibrator`` take a DataFrame of logits,
+whose column names are the class names (``Table.classes``), and labels as class names
+(``"background"`` for background rows) as well as integers; an unknown name raises
+``ValueError``. pandas itself is optional (never imported by mlmap).
+
+Evaluation in bounded memory: ``Evaluator(table)`` takes rows shard by shard
+(``update``), merges (``merge``, ``+``, ``sum()``), pickles (Dask, multiprocessing) and
+gives ``evaluate``'s report (``report()``); ``report_frame(report)`` is a report as a
+pandas DataFrame (a row per method).
+
+Quantized logits: ``Table.quantized_scores(head, codes, objectness)`` scores int8 or
+int16 codes through the table file's quantized section (``mlmap quantize``), as
+``mlmap apply --quantized``.
+
+Size: ``fit`` and ``tune`` warn (``TableSizeWarning``) when the table is larger than
+``TABLE_SIZE_WARNING`` bytes (1 MiB): the Bayes head grows as ``K * (K + 1)``
+histograms; ``bayes=False`` or fewer Bayes bins shrink it.
+
 scikit-learn: ``Calibrator(head="open", ...)`` is an estimator over ``fit`` and ``tune``
 (``fit``, ``predict_proba``, ``predict``, ``get_params``, ``set_params``) that goes after a
 model in a ``Pipeline``; a pandas DataFrame of logits names the classes by its columns,
 and labels may be class names (``"background"`` for background rows).
 """
 
+from . import _mlmap
 from ._mlmap import (
     FORMAT_VERSION,
+    Evaluator,
     FitCounts,
     FitEdges,
     FitStats,
@@ -55,17 +75,27 @@ from ._mlmap import (
     Table,
     TableError,
     decide,
-    evaluate,
     finish,
-    fit,
     conformal_fit,
     monitor_fit,
-    tune,
+)
+from ._frames import (
+    TABLE_SIZE_WARNING,
+    TableSizeWarning,
+    accepting_frames as _accepting_frames,
+    report_frame,
 )
 from ._calibrator import Calibrator
 
+# DataFrames and class-name labels (`_frames`); signatures and docstrings stay the
+# extension module's.
+fit = _accepting_frames(_mlmap.fit)
+tune = _accepting_frames(_mlmap.tune)
+evaluate = _accepting_frames(_mlmap.evaluate)
+
 __all__ = [
     "Calibrator",
+    "Evaluator",
     "FORMAT_VERSION",
     "HEADS",
     "FitCounts",
@@ -74,12 +104,15 @@ __all__ = [
     "Monitor",
     "Table",
     "TableError",
+    "TABLE_SIZE_WARNING",
+    "TableSizeWarning",
     "decide",
     "evaluate",
     "finish",
     "fit",
     "monitor_fit",
     "conformal_fit",
+    "report_frame",
     "tune",
 ]
 

@@ -11,23 +11,27 @@ from typing import Dict, Optional, Sequence, Union
 
 import numpy as np
 
-from ._mlmap import decide, fit as _fit, tune as _tune
+from . import _frames
+from ._mlmap import decide, fit as _raw_fit, tune as _raw_tune
+
+_fit = _frames.accepting_frames(_raw_fit)
+_tune = _frames.accepting_frames(_raw_tune)
 
 try:  # pragma: no cover - which branch runs depends on the environment
-    from sklearn.base import BaseEstimator as _Base, ClassifierMixin as _Mixin
-    from sklearn.exceptions import NotFittedError as _NotFittedError
+    from sklearn.base import BaseEstimator as _Base, ClassifierMixin as _Mixin  # type: ignore[import-untyped]
+    from sklearn.exceptions import NotFittedError as _NotFittedError  # type: ignore[import-untyped]
 
     _HAVE_SKLEARN = True
 except ImportError:  # pragma: no cover
     _HAVE_SKLEARN = False
 
-    class _NotFittedError(ValueError, AttributeError):
+    class _NotFittedError(ValueError, AttributeError):  # type: ignore[no-redef]
         """The estimator is used before ``fit``."""
 
-    class _Mixin:
+    class _Mixin:  # type: ignore[no-redef]
         pass
 
-    class _Base:
+    class _Base:  # type: ignore[no-redef]
         """``get_params`` / ``set_params`` as scikit-learn's ``BaseEstimator`` gives them:
         the parameters are the constructor's keyword arguments, stored as attributes."""
 
@@ -60,11 +64,8 @@ except ImportError:  # pragma: no cover
 
 
 _HEADS = ("ml", "map", "bayes", "open")
-BACKGROUND = "background"
-
-
-def _is_dataframe(x) -> bool:
-    return hasattr(x, "columns") and hasattr(x, "to_numpy") and getattr(x, "ndim", 0) == 2
+BACKGROUND = _frames.BACKGROUND
+_is_dataframe = _frames.is_dataframe
 
 
 def _logits_array(x, what="logits") -> np.ndarray:
@@ -189,19 +190,9 @@ class Calibrator(_Mixin, _Base):
 
     def _class_names(self, logits, k):
         """The class names of a fit: the DataFrame's columns, `classes`, or None."""
-        names = None
-        if _is_dataframe(logits):
-            names = [str(c) for c in logits.columns]
-        if self.classes is not None:
-            given = [str(c) for c in self.classes]
-            if len(given) != k:
-                raise ValueError(f"classes: {len(given)} names for {k} logit columns")
-            if names is not None and names != given:
-                raise ValueError(
-                    f"classes: {given} differ from the DataFrame's columns {names}"
-                )
-            names = given
-        return names
+        if self.classes is not None and len(self.classes) != k:
+            raise ValueError(f"classes: {len(self.classes)} names for {k} logit columns")
+        return _frames.class_names(logits, self.classes)
 
     def _labels(self, y, n, names):
         """`y` as class indices (-1 background)."""
@@ -225,20 +216,7 @@ class Calibrator(_Mixin, _Base):
                 )
             return a.astype(np.int64)
         if a.dtype.kind in "USO":
-            index = {c: i for i, c in enumerate(names)}
-            index[BACKGROUND] = -1
-            out = np.empty(n, dtype=np.int64)
-            for i, v in enumerate(a):
-                if not isinstance(v, str) and isinstance(v, (int, np.integer)):
-                    out[i] = int(v)
-                    continue
-                if not isinstance(v, (str, np.str_)) or v not in index:
-                    raise ValueError(
-                        f"y: row index {i}: label {v!r} is not a class name "
-                        f"({', '.join(names)}) or {BACKGROUND!r}"
-                    )
-                out[i] = index[v]
-            return out
+            return _frames.labels(a, n, names, "y")
         raise ValueError(f"y: expected integers or class names, got dtype {a.dtype}")
 
     def _check_params(self):

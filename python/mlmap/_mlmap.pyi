@@ -6,23 +6,41 @@ from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union, f
 import numpy as np
 import numpy.typing as npt
 
+__all__ = [
+    "FORMAT_VERSION",
+    "FitCounts",
+    "FitEdges",
+    "FitStats",
+    "Evaluator",
+    "Monitor",
+    "Table",
+    "TableError",
+    "conformal_fit",
+    "decide",
+    "evaluate",
+    "finish",
+    "fit",
+    "monitor_fit",
+    "tune",
+]
+
 FORMAT_VERSION: int
 
-HeadName = Literal["ml", "map", "bayes", "open"]
+_HeadName = Literal["ml", "map", "bayes", "open"]
 #: `(N, K)` float logits, or anything `numpy.asarray` turns into such an array. A
 #: C-contiguous, aligned float32 or float64 array is read in place; any other layout
 #: (Fortran order, strided, reversed or unaligned views, fields of structured arrays,
 #: byte-swapped or other float dtypes) is copied once, with the same result.
-Logits = npt.ArrayLike
+_Logits = npt.ArrayLike
 #: `None` (1.0 for every row), a number, or an `(N,)` float array, in `[0, 1]`.
-Objectness = Union[None, float, npt.ArrayLike]
+_Objectness = Union[None, float, npt.ArrayLike]
 #: `(N,)` integers of any width and byte order, any layout: `0 .. K-1` a class in the
 #: table's order, `-1` background.
-Labels = npt.ArrayLike
+_Labels = npt.ArrayLike
 #: The bytes of a file: `bytes`, `bytearray`, a `memoryview` or any C-contiguous buffer
 #: of single bytes (a numpy `uint8` array); anything else raises `TypeError`.
-Buffer = Union[bytes, bytearray, memoryview, npt.NDArray[np.uint8]]
-PathLike = Union[str, "os.PathLike[str]"]
+_Buffer = Union[bytes, bytearray, memoryview, npt.NDArray[np.uint8]]
+_PathLike = Union[str, "os.PathLike[str]"]
 
 class TableError(ValueError):
     """A table that does not decode or breaks a table invariant."""
@@ -40,7 +58,7 @@ class Table:
     """
 
     @staticmethod
-    def from_bytes(data: Buffer) -> "Table":
+    def from_bytes(data: _Buffer) -> "Table":
         """Decodes the bytes of a `.mlmap` file (a quantized section is checked and
         kept); raises `TableError` when invalid, `TypeError` for a non-buffer or a
         non-contiguous buffer."""
@@ -48,10 +66,10 @@ class Table:
         """The file's bytes (the `.mlmap` file format): the table, then its quantized
         section when it was read with one."""
     @staticmethod
-    def load(path: PathLike) -> "Table":
+    def load(path: _PathLike) -> "Table":
         """Reads a `.mlmap` file, keeping a quantized section (`FileNotFoundError`,
         `TableError`, ...)."""
-    def save(self, path: PathLike) -> None:
+    def save(self, path: _PathLike) -> None:
         """Writes the file (with its quantized section, if any), through a temporary
         file renamed into place."""
     @property
@@ -106,7 +124,7 @@ class Table:
         """The conformal section (docs/DESIGN.md section 8): `None`, or `{"head", "alpha",
         "thresholds", "calibration_rows"}`."""
     def conformal_sets(
-        self, logits: Logits, objectness: Objectness = None
+        self, logits: _Logits, objectness: _Objectness = None
     ) -> npt.NDArray[np.bool_]:
         """The `(N, K)` conformal sets: `True` where the class is in the row's set."""
     def histogram(
@@ -115,25 +133,33 @@ class Table:
         """`(edges, frequencies)` of a class's histogram: `B + 1` edges, `B` values.
         A class index outside `0 .. K-1`, or the head `"bayes"` or `"open"` (no
         per-class histogram), raises `ValueError`."""
-    def ml(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
+    def ml(self, logits: _Logits, objectness: _Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` ML scores; each row sums to its objectness (before the head's
         recalibration map, if the table holds one: see `recal_map`)."""
-    def map(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
+    def map(self, logits: _Logits, objectness: _Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` MAP scores; each row sums to its objectness."""
-    def bayes(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
+    def bayes(self, logits: _Logits, objectness: _Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` Bayes scores; each row sums to at most its objectness. A table
         without that head raises `ValueError`."""
-    def open(self, logits: Logits, objectness: Objectness = None) -> npt.NDArray[np.float32]:
+    def open(self, logits: _Logits, objectness: _Objectness = None) -> npt.NDArray[np.float32]:
         """`(N, K)` open-head scores, `OS * q * softmax(logits / T)`: the detector's
         softmax at the table's temperature times the probability `q` that the
         detection is of a known class; each row sums to at most its objectness and
         ranks the classes as the logits do. A table without that head (version 1 or
         2) raises `ValueError`."""
     def scores(
-        self, head: HeadName, logits: Logits, objectness: Objectness = None
+        self, head: _HeadName, logits: _Logits, objectness: _Objectness = None
     ) -> npt.NDArray[np.float32]:
         """The scores of `head`, as `ml`."""
-    def recal_map(self, head: HeadName) -> Optional[List[Tuple[float, float]]]:
+    def quantized_scores(
+        self, head: _HeadName, codes: npt.ArrayLike, objectness: _Objectness = None
+    ) -> npt.NDArray[np.float32]:
+        """`(N, K)` float32 scores of `head` for integer logit codes (int8 for an 8-bit
+        section, int16 for a 16-bit one, or any integer array of codes in range),
+        through the table's quantized section (`mlmap quantize`): those of `mlmap apply
+        --quantized`, bit for bit. No section, a head the section lacks or a code out
+        of range raise `ValueError`; a non-integer array `TypeError`."""
+    def recal_map(self, head: _HeadName) -> Optional[List[Tuple[float, float]]]:
         """The recalibration map of `head` as its knots `(x, y)`, or `None` when the
         table holds none for it. Every scoring method applies it: the head's top
         score `t` becomes `g(t)` and the other scores keep their ratios to it (a row
@@ -145,18 +171,18 @@ class Table:
     def __hash__(self) -> int: ...
     def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
 
-def decide(scores: npt.ArrayLike, logits: Logits) -> npt.NDArray[np.int64]:
+def decide(scores: npt.ArrayLike, logits: _Logits) -> npt.NDArray[np.int64]:
     """The decided class of every row: the largest score, ties to the larger logit.
     A NaN score or logit raises `ValueError` (no class can be said to win)."""
 
 def evaluate(
     table: Table,
-    logits: Logits,
-    labels: Labels,
-    objectness: Objectness = None,
+    logits: _Logits,
+    labels: _Labels,
+    objectness: _Objectness = None,
     *,
     val: Optional[Sequence[Any]] = None,
-    ood: Optional[Union[Logits, Sequence[Any]]] = None,
+    ood: Optional[Union[_Logits, Sequence[Any]]] = None,
     ece_bins: int = 10,
     ece_binning: Literal["design", "default", "netcal", "torchmetrics"] = "design",
     classes: Optional[Sequence[str]] = None,
@@ -167,16 +193,57 @@ def evaluate(
     row, taken by `str()`) adds the metrics per value under `"groups"`, as
     `mlmap eval --group-by`."""
 
+@final
+class Evaluator:
+    """The metrics of `evaluate` for every method, accumulated shard by shard in
+    bounded memory: `update` rows, `merge` (or `+`, `sum()`) evaluators of shards in
+    any order, pickle them (Dask, multiprocessing), and `report()`.
+
+    Methods: sigmoid, softmax, temperature (with `temperature=T`) and the table's
+    heads. `ece`, `mce`, `nll`, `brier`, `accuracy`, `tp_*` and `fp_*` equal
+    `evaluate`'s up to the order of floating-point additions; `auroc` and
+    `ap_<class>` count scores within `1 / rank_levels` of each other as tied. Memory:
+    per method `(K + 1) * (rank_levels + 1)` pairs of counts.
+    """
+
+    def __new__(
+        cls,
+        table: Table,
+        *,
+        ece_bins: int = 10,
+        ece_binning: Literal["design", "default", "netcal", "torchmetrics"] = "design",
+        temperature: Optional[float] = None,
+        rank_levels: int = 65536,
+    ) -> "Evaluator": ...
+    def update(self, logits: _Logits, labels: _Labels, objectness: _Objectness = None) -> None:
+        """Adds rows (checked as `evaluate` checks them; an empty shard adds nothing)."""
+    def merge(self, other: "Evaluator") -> "Evaluator":
+        """A new evaluator holding the rows of both."""
+    def __add__(self, other: Union["Evaluator", int], /) -> "Evaluator": ...
+    def __radd__(self, other: Union["Evaluator", int], /) -> "Evaluator": ...
+    @property
+    def rows(self) -> int:
+        """Rows added."""
+    def report(self) -> Dict[str, Any]:
+        """`evaluate`'s dict for the rows added (`"methods"`, `"rows"`, `"classes"`,
+        `"ece_bins"`, `"ece_binning"`, `"rank_levels"`); no rows raise `ValueError`."""
+    def to_bytes(self) -> bytes:
+        """The state as bytes (the table, the settings, every count and sum)."""
+    @staticmethod
+    def from_bytes(data: _Buffer) -> "Evaluator":
+        """Reads `to_bytes`'s output; anything else raises `ValueError`."""
+    def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
+
 #: The `bayes` keyword: `True` (the default head: 22 bins, lambda 1e-3), `False` or
 #: `None` (no Bayes head), or `{"bins": int, "lambda": float}`.
-BayesSetting = Union[bool, None, Dict[str, Union[int, float]]]
+_BayesSetting = Union[bool, None, Dict[str, Union[int, float]]]
 
 def fit(
-    logits: Logits,
-    labels: Labels,
-    objectness: Objectness = None,
+    logits: _Logits,
+    labels: _Labels,
+    objectness: _Objectness = None,
     *,
-    background: Optional[Logits] = None,
+    background: Optional[_Logits] = None,
     classes: Optional[Sequence[str]] = None,
     bins_ml: int = 22,
     lambda_ml: Optional[float] = None,
@@ -184,7 +251,7 @@ def fit(
     lambda_map: Optional[float] = None,
     edges: Literal["linspace", "matlab"] = "linspace",
     tail: Literal["zero", "clamp"] = "zero",
-    bayes: BayesSetting = True,
+    bayes: _BayesSetting = True,
 ) -> Table:
     """Fits a table (the bytes `mlmap fit` writes on the same rows). `background` is
     an `(N_b, K)` float array of more rows taken as background whatever they are (the
@@ -195,13 +262,13 @@ def fit(
     `1 .. 65535` (negative ones too) raises `ValueError`."""
 
 def tune(
-    logits: Logits,
-    labels: Labels,
+    logits: _Logits,
+    labels: _Labels,
     val: Sequence[Any],
-    objectness: Objectness = None,
+    objectness: _Objectness = None,
     *,
-    ood: Optional[Union[Logits, Sequence[Any]]] = None,
-    background: Optional[Logits] = None,
+    ood: Optional[Union[_Logits, Sequence[Any]]] = None,
+    background: Optional[_Logits] = None,
     classes: Optional[Sequence[str]] = None,
     objective: Literal["ece", "nll", "brier"] = "ece",
     bins_ml: Optional[Sequence[int]] = None,
@@ -240,12 +307,12 @@ class FitStats:
 
     def __new__(
         cls,
-        logits: Logits,
-        labels: Labels,
-        objectness: Objectness = None,
+        logits: _Logits,
+        labels: _Labels,
+        objectness: _Objectness = None,
         *,
         classes: Optional[Sequence[str]] = None,
-        background: Optional[Logits] = None,
+        background: Optional[_Logits] = None,
     ) -> "FitStats":
         """The statistics of the rows, and of the rows `background` takes as background
         (as `fit` takes them)."""
@@ -266,7 +333,7 @@ class FitStats:
         lambda_map: Optional[float] = None,
         edges: Literal["linspace", "matlab"] = "linspace",
         tail: Literal["zero", "clamp"] = "zero",
-        bayes: BayesSetting = True,
+        bayes: _BayesSetting = True,
     ) -> "FitEdges":
         """The edges pass (b) counts against, for a fit with these settings."""
     def finish(self, counts: "FitCounts") -> Table: ...
@@ -275,7 +342,7 @@ class FitStats:
     def __radd__(self, other: Union["FitStats", int], /) -> "FitStats": ...
     def to_bytes(self) -> bytes: ...
     @staticmethod
-    def from_bytes(data: Buffer) -> "FitStats": ...
+    def from_bytes(data: _Buffer) -> "FitStats": ...
     def __eq__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
 
@@ -287,7 +354,7 @@ class FitEdges:
     def classes(self) -> List[str]: ...
     def to_bytes(self) -> bytes: ...
     @staticmethod
-    def from_bytes(data: Buffer) -> "FitEdges": ...
+    def from_bytes(data: _Buffer) -> "FitEdges": ...
     def __eq__(self, other: object, /) -> bool: ...
 
 @final
@@ -297,11 +364,11 @@ class FitCounts:
     def __new__(
         cls,
         edges: FitEdges,
-        logits: Logits,
-        labels: Labels,
-        objectness: Objectness = None,
+        logits: _Logits,
+        labels: _Labels,
+        objectness: _Objectness = None,
         *,
-        background: Optional[Logits] = None,
+        background: Optional[_Logits] = None,
     ) -> "FitCounts":
         """The counts of the rows over `edges`, and of the rows `background` takes as
         background (give a shard the same rows as for its `FitStats`)."""
@@ -314,13 +381,14 @@ class FitCounts:
     def __radd__(self, other: Union["FitCounts", int], /) -> "FitCounts": ...
     def to_bytes(self) -> bytes: ...
     @staticmethod
-    def from_bytes(data: Buffer) -> "FitCounts": ...
+    def from_bytes(data: _Buffer) -> "FitCounts": ...
     def __eq__(self, other: object, /) -> bool: ...
     def __hash__(self) -> int: ...
 
 def finish(stats: FitStats, counts: FitCounts) -> Table:
     """The table of merged statistics and merged counts of the same rows."""
 
+@final
 class Monitor:
     """A drift monitor (docs/DESIGN.md section 7) over a table file's monitor section."""
 
@@ -355,9 +423,9 @@ def monitor_fit(
 
 def conformal_fit(
     table: Table,
-    logits: Logits,
-    labels: Labels,
-    objectness: Objectness = None,
+    logits: _Logits,
+    labels: _Labels,
+    objectness: _Objectness = None,
     *,
     alpha: float,
     head: Literal["ml", "map", "bayes", "open"] = "map",

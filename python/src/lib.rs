@@ -16,8 +16,10 @@ mod arrays;
 mod conformal;
 mod errors;
 mod evaluate;
+mod evaluator;
 mod fit;
 mod monitor;
+mod quantized;
 mod score;
 mod source;
 mod table;
@@ -96,6 +98,7 @@ fn _mlmap(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(conformal::conformal_fit, m)?)?;
     m.add("TableError", m.py().get_type::<errors::TableError>())?;
     m.add_function(wrap_pyfunction!(evaluate::evaluate, m)?)?;
+    m.add_class::<evaluator::PyEvaluator>()?;
     m.add_function(wrap_pyfunction!(decide, m)?)?;
     m.add_class::<fit::PyFitStats>()?;
     m.add_class::<fit::PyFitEdges>()?;

@@ -56,7 +56,7 @@ impl PyTable {
 
     /// Decodes the bytes of a table file, keeping a valid quantized section and
     /// refusing an invalid one; `context` prefixes the messages (a file's path).
-    fn decode(bytes: &[u8], context: &str) -> PyResult<Self> {
+    pub(crate) fn decode(bytes: &[u8], context: &str) -> PyResult<Self> {
         let error = |msg: String| table_error(format!("{context}{msg}"));
         let table = DynTable::from_bytes(bytes).map_err(|e| error(e.to_string()))?;
         let mut t = Self::new(table)?;

@@ -31,6 +31,37 @@ impl Sum {
     pub(super) fn value(self) -> f64 {
         self.sum + self.carry
     }
+
+    /// Adds another sum (its value and its carry).
+    pub(super) fn merge(&mut self, other: Self) {
+        self.add(other.sum);
+        self.add(other.carry);
+    }
+
+    /// `(sum, carry)`, for serialization.
+    pub(super) fn parts(self) -> (f64, f64) {
+        (self.sum, self.carry)
+    }
+
+    /// A sum from [`parts`](Self::parts).
+    pub(super) fn from_parts((sum, carry): (f64, f64)) -> Self {
+        Self { sum, carry }
+    }
+}
+
+/// One confidence bin as serialized: count, correct, and the sum of confidences.
+type BinWire = (u64, u64, (f64, f64));
+
+/// The serialized state of an [`Accumulator`] (its edges follow from the config).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub(super) struct AccumulatorWire {
+    /// Per bin: count, correct, and the sum of confidences.
+    bins: Option<Vec<BinWire>>,
+    nll: Option<((f64, f64), u64)>,
+    brier: Option<(f64, f64)>,
+    rows: u64,
+    labelled: u64,
+    correct: u64,
 }
 
 /// Mean and population variance (two passes); `None` for no values.
@@ -184,6 +215,104 @@ impl Accumulator {
                 sum.add(d * d);
             }
         }
+    }
+
+    /// Adds the rows of `other`, an accumulator of the same configuration and parts
+    /// without ranking: the sums are added (compensated), the counts exactly.
+    ///
+    /// # Errors
+    ///
+    /// [`MetricsError::Shape`] when the two keep different bins or parts, or either
+    /// keeps the ranking.
+    pub fn merge(&mut self, other: &Self) -> Result<(), MetricsError> {
+        let same_bins = match (&self.bins, &other.bins) {
+            (Some(a), Some(b)) => a.len() == b.len(),
+            (None, None) => true,
+            _ => false,
+        };
+        if !same_bins
+            || self.nll.is_some() != other.nll.is_some()
+            || self.brier.is_some() != other.brier.is_some()
+            || self.ranking.is_some()
+            || other.ranking.is_some()
+        {
+            return Err(MetricsError::Shape);
+        }
+        if let (Some(a), Some(b)) = (&mut self.bins, &other.bins) {
+            for (x, y) in a.iter_mut().zip(b) {
+                x.count += y.count;
+                x.correct += y.correct;
+                x.conf.merge(y.conf);
+            }
+        }
+        if let (Some((s, n)), Some((t, m))) = (&mut self.nll, other.nll) {
+            s.merge(t);
+            *n += m;
+        }
+        if let (Some(s), Some(t)) = (&mut self.brier, other.brier) {
+            s.merge(t);
+        }
+        self.rows += other.rows;
+        self.labelled += other.labelled;
+        self.correct += other.correct;
+        Ok(())
+    }
+
+    /// The state as plain numbers (without the ranking part).
+    pub(super) fn to_wire(&self) -> AccumulatorWire {
+        AccumulatorWire {
+            bins: self.bins.as_ref().map(|b| {
+                b.iter()
+                    .map(|x| (x.count as u64, x.correct as u64, x.conf.parts()))
+                    .collect()
+            }),
+            nll: self.nll.map(|(s, n)| (s.parts(), n as u64)),
+            brier: self.brier.map(Sum::parts),
+            rows: self.rows as u64,
+            labelled: self.labelled as u64,
+            correct: self.correct as u64,
+        }
+    }
+
+    /// An accumulator of `cfg` from [`to_wire`](Self::to_wire)'s state; `None` when
+    /// the state does not fit the configuration (another number of bins, counts that
+    /// contradict each other).
+    pub(super) fn from_wire(cfg: &MetricsConfig, w: &AccumulatorWire) -> Option<Self> {
+        let parts = Parts {
+            calibration: w.bins.is_some(),
+            nll: w.nll.is_some(),
+            brier: w.brier.is_some(),
+            ranking: false,
+        };
+        let mut acc = Self::new(cfg, parts).ok()?;
+        let size = |v: u64| usize::try_from(v).ok();
+        if let (Some(bins), Some(wb)) = (&mut acc.bins, &w.bins) {
+            if bins.len() != wb.len() {
+                return None;
+            }
+            for (b, &(count, correct, conf)) in bins.iter_mut().zip(wb) {
+                if correct > count {
+                    return None;
+                }
+                *b = BinSum {
+                    count: size(count)?,
+                    correct: size(correct)?,
+                    conf: Sum::from_parts(conf),
+                };
+            }
+        }
+        acc.nll = match w.nll {
+            Some((s, n)) => Some((Sum::from_parts(s), size(n)?)),
+            None => None,
+        };
+        acc.brier = w.brier.map(Sum::from_parts);
+        acc.rows = size(w.rows)?;
+        acc.labelled = size(w.labelled)?;
+        acc.correct = size(w.correct)?;
+        if acc.labelled > acc.rows || acc.correct > acc.labelled {
+            return None;
+        }
+        Some(acc)
     }
 
     /// Rows added.

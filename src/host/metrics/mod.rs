@@ -30,6 +30,7 @@ mod accumulate;
 mod binning;
 mod outcome;
 mod ranking;
+mod stream;
 
 use core::fmt;
 use std::string::String;
@@ -41,6 +42,7 @@ pub use self::outcome::{decision, outcomes, outcomes_with_logits, Outcome};
 pub use self::ranking::{
     average_precision, fpr_at_95_tpr, precision_recall_curve, separation_auroc, PrPoint,
 };
+pub use self::stream::{StreamMetrics, DEFAULT_RANK_LEVELS, MAX_RANK_LEVELS};
 
 use self::accumulate::{mean_var, Sum};
 use self::outcome::{check_scores, outcome};
