@@ -309,7 +309,7 @@ pub struct WindowReport<const K: usize> {
 /// use mlmap::{Monitor, MonitorSpec, Table};
 ///
 /// // A table file with a monitor section (written by `mlmap monitor fit`).
-/// let bytes = include_bytes!("../../tests/golden/monitor_small.mlmap");
+/// let bytes = include_bytes!("../../../tests/golden/monitor_small.mlmap");
 /// let table: Table<3, 22, 17, 22, 4> = Table::from_bytes(bytes)?;
 /// let spec = MonitorSpec::from_bytes(bytes, &table.view())?;
 /// let mut monitor: Monitor<'_, 3, 22, 4> = Monitor::new(&spec)?;

@@ -315,7 +315,7 @@ impl core::error::Error for QTableError {}
 /// # use mlmap_core as mlmap;
 /// use mlmap::{quantize_into, QParams, QTable, Table};
 ///
-/// let table = Table::<3, 22, 17, 22, 4>::from_bytes(include_bytes!("../../tables/default.mlmap"))?;
+/// let table = Table::<3, 22, 17, 22, 4>::from_bytes(include_bytes!("../../../tables/default.mlmap"))?;
 /// let params = QParams { bits: 8, scales: &[0.08; 3], zero_points: &[0; 3], bayes: true };
 /// let mut buf = [0u8; 6144];
 /// let bytes = quantize_into(&table.view(), &params, &mut buf)?;
@@ -566,7 +566,7 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
     ///
     /// ```
     /// # use mlmap_core as mlmap;
-    /// let q = mlmap::QTable::<3, i8>::from_bytes(include_bytes!("../../tables/default_q8.mlmap"))?;
+    /// let q = mlmap::QTable::<3, i8>::from_bytes(include_bytes!("../../../tables/default_q8.mlmap"))?;
     /// assert_eq!(q.logits(&[50, -25, 0]), [4.0, -2.0, 0.0]);
     /// let never_seen = q.ml(&[-128; 3], 1.0)?; // OS / K each: ties everywhere
     /// assert_eq!(never_seen.decide(&q.logits(&[-128, -100, -128])), 1);
