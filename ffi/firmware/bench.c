@@ -40,16 +40,7 @@ static mlmap_table_t shipped, small_open, small_maps;
 
 static void put_str(const char *s) { sh_write0(s); }
 
-static void put_uint(uint32_t v) {
-    char b[12];
-    int i = 11;
-    b[i] = '\0';
-    do {
-        b[--i] = (char)('0' + v % 10u);
-        v /= 10u;
-    } while (v && i > 0);
-    put_str(&b[i]);
-}
+static void put_uint(uint32_t v) { sh_write_uint(v); }
 
 static void put_hex(uint32_t v) {
     char b[9];

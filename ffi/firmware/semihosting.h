@@ -21,4 +21,16 @@ __attribute__((noreturn)) static inline void sh_exit(int status) {
     }
 }
 
+/* Writes `v` in decimal. */
+static inline void sh_write_uint(uint32_t v) {
+    char b[12];
+    int i = 11;
+    b[i] = '\0';
+    do {
+        b[--i] = (char)('0' + v % 10u);
+        v /= 10u;
+    } while (v && i > 0);
+    sh_write0(&b[i]);
+}
+
 #endif

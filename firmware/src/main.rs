@@ -55,9 +55,11 @@ mod expected;
 #[allow(clippy::excessive_precision)]
 mod lidar_expected;
 
+mod rt;
+
 use core::hint::black_box;
 
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use mlmap::embedded::quantized::{EmbeddedQTable, QUANTIZED, QUANTIZED_SECTION};
 use mlmap::embedded::{EmbeddedTable, TABLE};
@@ -1162,24 +1164,6 @@ fn main() -> ! {
     } else {
         debug::EXIT_FAILURE
     });
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    hprintln!("HardFault: {:?}", frame);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
-    hprintln!("panic: {}", info);
-    debug::exit(debug::EXIT_FAILURE);
     loop {
         cortex_m::asm::wfi();
     }

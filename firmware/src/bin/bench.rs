@@ -22,10 +22,13 @@
 #![no_std]
 #![no_main]
 
+#[path = "../rt.rs"]
+mod rt;
+
 use core::hint::black_box;
 
 use cortex_m::peripheral::syst::SystClkSource;
-use cortex_m_rt::{entry, exception, ExceptionFrame};
+use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use mlmap::baseline::sigmoid;
 use mlmap::{Bounded, BoundedTable, FastMath, InferError, Libm, QTable, Scores, Table, TableView};
@@ -335,26 +338,5 @@ fn main() -> ! {
 /// Reports a failure and stops.
 fn fail(what: &str) -> ! {
     hprintln!("FAILED: {}", what);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[exception]
-unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
-    hprintln!("HardFault: {:?}", frame);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
-}
-
-#[panic_handler]
-fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
-    hprintln!("panic: {}", info);
-    debug::exit(debug::EXIT_FAILURE);
-    loop {
-        cortex_m::asm::wfi();
-    }
+    rt::exit_failure()
 }
