@@ -7,7 +7,9 @@
 #   3. the Rust test of the entry points, and the host C test ffi/tests/host.c: every
 #      function and status, NULL and short buffers, every single-byte corruption,
 #      every aliasing rule, scores of every head equal bit for bit to `mlmap apply`, the
-#      open head within 1e-6 of the float64 reference (tests/golden/layer); then host.c again
+#      open head within 1e-6 of the float64 reference (tests/golden/layer); the quantized
+#      C test ffi/tests/quantized.c: int8 and int16 sections, every call and status, the
+#      scores of every head equal bit for bit to `mlmap apply --quantized`; then both again
 #      under -fsanitize=address,undefined, with the release library and with one built
 #      with nightly's -Zsanitizer=address (a canary read past a buffer must be caught);
 #   4. the C example ffi/firmware/ on an emulated Cortex-M4F (arm-none-eabi-gcc, the
@@ -93,6 +95,40 @@ mlmap=target/release/mlmap
     "$work/apply.csv" tests/golden/layer | tee "$work/host.log"
 grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/host.log" || fail "the host C test did not pass"
 
+section "quantized C test against \`mlmap apply --quantized\`"
+# Codes of the test rows: the shipped int8 section (scale 0.08, zero point 0), and a
+# 16-bit section with a scale and zero point per class, written here.
+python3 - examples/data/test.csv "$work/codes8.csv" "$work/codes16.csv" <<'CODES'
+import csv, sys
+src, out8, out16 = sys.argv[1:]
+scales16, zeros16 = [0.002, 0.003, 0.0025], [10, -5, 0]
+with open(src) as f, open(out8, "w") as f8, open(out16, "w") as f16:
+    rows = csv.DictReader(f)
+    names = ["car", "cyclist", "pedestrian"]
+    head = "id,label,objectness," + ",".join(names) + "\n"
+    f8.write(head)
+    f16.write(head)
+    for r in rows:
+        x = [float(r[n]) for n in names]
+        q8 = [max(-128, min(127, round(v / 0.08))) for v in x]
+        q16 = [max(-32768, min(32767, round(v / s) + z)) for v, s, z in zip(x, scales16, zeros16)]
+        pre = f"{r['id']},{r['label']},{r['objectness']},"
+        f8.write(pre + ",".join(map(str, q8)) + "\n")
+        f16.write(pre + ",".join(map(str, q16)) + "\n")
+CODES
+"$mlmap" quantize --table tables/default.mlmap --bits 16 --scale 0.002,0.003,0.0025 \
+    --zero-point 10,-5,0 --output "$work/q16.mlmap"
+"$mlmap" apply --quantized --table tables/default_q8.mlmap --input "$work/codes8.csv" \
+    --output "$work/apply8.csv"
+"$mlmap" apply --quantized --table "$work/q16.mlmap" --input "$work/codes16.csv" \
+    --output "$work/apply16.csv"
+QARGS=(tables/default_q8.mlmap "$work/codes8.csv" "$work/apply8.csv" "$work/q16.mlmap"
+    "$work/codes16.csv" "$work/apply16.csv")
+cc "${CFLAGS[@]}" ffi/tests/quantized.c -Wl,--gc-sections "$lib" -lm -o "$work/quantized"
+"$work/quantized" "${QARGS[@]}" | tee "$work/quantized.log"
+grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/quantized.log" ||
+    fail "the quantized C test did not pass"
+
 section "host C test under AddressSanitizer and UndefinedBehaviorSanitizer"
 # Two libraries: the release one (fat LTO, panic abort), as a C program links it, which
 # shows that it links into a sanitized program and that nothing host.c does through it
@@ -118,6 +154,12 @@ for which in release asan; do
     grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/host-san-$which.log" ||
         fail "the sanitized host C test ($which library) did not pass"
     echo "ok: host.c under ASan and UBSan with the $which library"
+    cc "${SAN[@]}" ffi/tests/quantized.c -Wl,--gc-sections "$l" -lm -o "$work/quantized-san-$which"
+    "$work/quantized-san-$which" "${QARGS[@]}" 2>"$work/quantized-san-$which.err" |
+        tee "$work/quantized-san-$which.log" || { tail -n 40 "$work/quantized-san-$which.err" >&2; fail "the sanitized quantized C test ($which library) failed"; }
+    grep -qE '^[1-9][0-9]* passed, 0 failed$' "$work/quantized-san-$which.log" ||
+        fail "the sanitized quantized C test ($which library) did not pass"
+    echo "ok: quantized.c under ASan and UBSan with the $which library"
 done
 cat >"$work/san-canary.c" <<'CANARY'
 #include <stdlib.h>

@@ -144,6 +144,16 @@ typedef struct mlmap_table {
  */
 #define MLMAP_SET_WORDS(k) (((size_t)(k) + 31) / 32)
 
+/**
+ * Bytes of a quantized table's arena (mlmap_qtable_init()) for a section of `k`
+ * classes: a control block and, per class, a class and a logit record; the masses and
+ * terms stay in the section's bytes. Exact for 4- and 8-byte pointers, e.g. 372 bytes
+ * for 3 classes on a Cortex-M. Align it to 8:
+ * `static MLMAP_ALIGN8 uint8_t q_arena[MLMAP_QTABLE_ARENA_SIZE(3)];`.
+ */
+#define MLMAP_QTABLE_ARENA_SIZE(k) \
+  ((size_t)96 + 24 * sizeof(void *) + (size_t)(k) * (16 + 11 * sizeof(void *)))
+
 
 /**
  * Alignment of `mlmap_table_t` in bytes.
@@ -312,7 +322,7 @@ enum mlmap_status_t
   MLMAP_ERR_NO_MONITOR = 26,
   /**
    * The bytes hold no section of the kind asked for (a monitor section: magic MLMW;
-   * a conformal section: magic MLMS).
+   * a conformal section: magic MLMS; a quantized section: magic MLMQ).
    */
   MLMAP_ERR_NO_SECTION = 27,
   /**
@@ -326,10 +336,25 @@ enum mlmap_status_t
    */
   MLMAP_ERR_NO_CONFORMAL = 29,
   /**
-   * The table storage was copied or moved after its decode: it holds pointers into
-   * itself, so only the storage decoded into is a table (decode again instead).
+   * The table storage (or a quantized arena) was copied or moved after its decode:
+   * it holds pointers into itself, so only the storage decoded into is a table
+   * (decode again instead).
    */
   MLMAP_ERR_MOVED = 30,
+  /**
+   * Quantized scoring: codes of another width than the section's (an `_i8` call on
+   * a 16-bit section, or an `_i16` call on an 8-bit one).
+   */
+  MLMAP_ERR_CODE_WIDTH = 31,
+  /**
+   * A `head` argument is not one of the ::mlmap_head_t values.
+   */
+  MLMAP_ERR_UNKNOWN_HEAD = 32,
+  /**
+   * The quantized arena holds no quantized table (mlmap_qtable_init() did not
+   * succeed on it).
+   */
+  MLMAP_ERR_NO_QTABLE = 33,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -351,7 +376,8 @@ enum mlmap_field_t
  {
   /**
    * No field: success, or a failure of the whole input (magic, CRC, version, a body
-   * that does not parse: the parser reports no position) or of an argument.
+   * whose parts all parse but one is not in its shortest encoding) or of an
+   * argument.
    */
   MLMAP_FIELD_NONE = 0,
   /**
@@ -423,6 +449,66 @@ enum mlmap_field_t
    * The storage is smaller than the table needs (`needed`).
    */
   MLMAP_FIELD_STORAGE = 17,
+  /**
+   * A quantized class's scale (`class_index`).
+   */
+  MLMAP_FIELD_SCALE = 18,
+  /**
+   * A quantized class's zero point (`class_index`).
+   */
+  MLMAP_FIELD_ZERO_POINT = 19,
+  /**
+   * A quantized class's (or logit's) window of codes (`class_index`).
+   */
+  MLMAP_FIELD_CODE_WINDOW = 20,
+  /**
+   * A quantized code's bin index (`class_index`: the class or logit).
+   */
+  MLMAP_FIELD_BIN_INDEX = 21,
+  /**
+   * A quantized mass (`class_index`).
+   */
+  MLMAP_FIELD_MASS = 22,
+  /**
+   * A quantized Bayes log-term, log prior or log lambda (`class_index`: the logit or
+   * category, 0 for the header's).
+   */
+  MLMAP_FIELD_LOG_TERM = 23,
+  /**
+   * A quantized open head's unknown log-score.
+   */
+  MLMAP_FIELD_LOG_UNKNOWN = 24,
+  /**
+   * The checksum of the table a quantized section follows is not the one it was
+   * computed from.
+   */
+  MLMAP_FIELD_TABLE_CRC = 25,
+  /**
+   * Malformed: the table body ends inside, or breaks the syntax of, the settings.
+   */
+  MLMAP_FIELD_SETTINGS = 26,
+  /**
+   * Malformed: a class record (`class_index`; K when a record follows the K
+   * announced).
+   */
+  MLMAP_FIELD_CLASS_RECORD = 27,
+  /**
+   * Malformed: the Bayes head's data (lambda, rows, axes, log-terms).
+   */
+  MLMAP_FIELD_BAYES_DATA = 28,
+  /**
+   * Malformed: the open head's parameters.
+   */
+  MLMAP_FIELD_OPEN_PARAMS = 29,
+  /**
+   * Malformed: bytes left over after the last part.
+   */
+  MLMAP_FIELD_TRAILING_BYTES = 30,
+  /**
+   * Malformed: the header (the Bayes shape after the fixed fields), or a body
+   * shorter than the header's shape.
+   */
+  MLMAP_FIELD_HEADER = 31,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -431,6 +517,46 @@ typedef enum mlmap_field_t mlmap_field_t;
 typedef int32_t mlmap_field_t;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
+
+/**
+ * The heads, as the `head` argument of the quantized scoring calls (and the `head`
+ * of ::mlmap_error_t).
+ */
+enum mlmap_head_t
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : int32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  /**
+   * The ML head (docs/DESIGN.md §1.2).
+   */
+  MLMAP_HEAD_ML = 0,
+  /**
+   * The MAP head (docs/DESIGN.md §1.2).
+   */
+  MLMAP_HEAD_MAP = 1,
+  /**
+   * The Bayes head (docs/DESIGN.md §1.6).
+   */
+  MLMAP_HEAD_BAYES = 2,
+  /**
+   * The open head (docs/DESIGN.md §1.8).
+   */
+  MLMAP_HEAD_OPEN = 3,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum mlmap_head_t mlmap_head_t;
+#else
+typedef int32_t mlmap_head_t;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/**
+ * A quantized table: an arena initialised by `mlmap_qtable_init`, used through a
+ * pointer to it. Only the library reads or writes its contents.
+ */
+typedef struct mlmap_qtable_t mlmap_qtable_t;
 
 /**
  * The maximum shape this library was built for, and the storage it needs.
@@ -589,6 +715,44 @@ typedef struct {
    */
   uint32_t alarm_q;
 } mlmap_window_t;
+
+/**
+ * What a quantized table holds (`mlmap_qtable_info`).
+ */
+typedef struct {
+  /**
+   * Number of classes K (codes and scores per detection).
+   */
+  size_t classes;
+  /**
+   * Bits per code: 8 (call the `_i8` functions) or 16 (the `_i16` ones).
+   */
+  uint32_t bits;
+  /**
+   * Categories of the Bayes head (K, or K + 1 with `background`); 0 without it.
+   */
+  size_t categories;
+  /**
+   * 1 when the section has the open head, else 0.
+   */
+  uint32_t has_open;
+  /**
+   * The open head's temperature; 0 without it.
+   */
+  float temperature;
+  /**
+   * The open head's epsilon; 0 without it (or with epsilon 0: see `temperature`).
+   */
+  float epsilon;
+  /**
+   * CRC-32 of the table the section was computed from.
+   */
+  uint32_t table_crc;
+  /**
+   * Bytes of the section, trailer included (the bytes that must stay in place).
+   */
+  size_t section_len;
+} mlmap_qtable_info_t;
 
 #ifdef __cplusplus
 extern "C" {
@@ -1025,6 +1189,240 @@ mlmap_status_t mlmap_monitor_params(void *monitor,
                                     uint32_t *window,
                                     float *alpha,
                                     float *thresholds);
+
+/**
+ * Gives the bytes of arena mlmap_qtable_init() needs for the quantized section in
+ * `bytes` on this target: `MLMAP_QTABLE_ARENA_SIZE(k)` for its K classes.
+ *
+ * Checks the section's trailer, magic, CRC-32 and version, and K against
+ * `MLMAP_MAX_CLASSES`; the rest is checked by mlmap_qtable_init().
+ *
+ * @param bytes The section, alone or after its table (a file `mlmap quantize` wrote).
+ * @param len Number of bytes.
+ * @param[out] size Receives the bytes; must not overlap `bytes`.
+ * @param[out] detail As for mlmap_qtable_init(); may be NULL.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`, `MLMAP_ERR_NO_SECTION`,
+ *   `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`,
+ *   `MLMAP_ERR_SHAPE_TOO_LARGE`, `MLMAP_ERR_INVALID_SECTION`.
+ */
+mlmap_status_t mlmap_qtable_arena_size(const uint8_t *bytes,
+                                       size_t len,
+                                       size_t *size,
+                                       mlmap_error_t *detail);
+
+/**
+ * Validates the quantized section in `bytes` (as written by `mlmap quantize`: the
+ * section alone or after its table) once, and gives its handle: K class records in
+ * `arena`, the masses and terms read in place from `bytes` on every call.
+ *
+ * Checks, in order, those of the Rust `QTable::from_bytes`: the trailer and magic
+ * `MLMQ`, the section's CRC-32, the version, the header's fields (K at most
+ * `MLMAP_MAX_CLASSES`), the checksum of the table it follows (when it follows one),
+ * then every class's and logit's values, and that no byte is left over. On failure the
+ * arena holds no quantized table and `*qtable` is NULL.
+ *
+ * Lifetime: the handle reads `bytes` on every call: they must stay in place and
+ * unchanged while it is used (a section in flash, or a buffer not reused). The arena
+ * holds pointers into itself: do not copy or move it (a copy is refused with
+ * `MLMAP_ERR_MOVED`).
+ *
+ * Work: the CRC-32 over the section, then one pass over it; the arena's bytes beyond
+ * `MLMAP_QTABLE_ARENA_SIZE(k)` are never touched.
+ *
+ * @param[out] arena The storage, aligned to 8 (`static MLMAP_ALIGN8 uint8_t
+ *   arena[MLMAP_QTABLE_ARENA_SIZE(3)]`), or `MLMAP_ERR_MISALIGNED`.
+ * @param arena_size Bytes of the arena: at least `MLMAP_QTABLE_ARENA_SIZE(k)`
+ *   (`MLMAP_ERR_STORAGE_TOO_SMALL`, and `detail->needed` says how many).
+ * @param bytes The section's bytes; must not overlap the arena (`MLMAP_ERR_OVERLAP`).
+ * @param len Number of bytes.
+ * @param[out] qtable Receives the handle (the arena's address) on success, NULL on
+ *   failure; may be NULL.
+ * @param[out] detail If not NULL, receives the status and, for an invalid section, the
+ *   field (`MLMAP_FIELD_SCALE`, `_ZERO_POINT`, `_CODE_WINDOW`, `_BIN_INDEX`, `_MASS`,
+ *   `_LOG_TERM`, `_LOG_UNKNOWN`, `_TABLE_CRC`, `_SHAPE`, `_LAMBDA`, `_TEMPERATURE`,
+ *   `_EPSILON`, `_MAP`, `_OBJECTNESS`) and the class or logit it is about.
+ * @return `MLMAP_OK`, or `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_STORAGE_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_TOO_LARGE`,
+ *   `MLMAP_ERR_NO_SECTION`, `MLMAP_ERR_CORRUPTED`, `MLMAP_ERR_UNSUPPORTED_VERSION`,
+ *   `MLMAP_ERR_SHAPE_TOO_LARGE`, `MLMAP_ERR_INVALID_SECTION` (a value, the layout, or
+ *   another table's checksum).
+ */
+mlmap_status_t mlmap_qtable_init(void *arena,
+                                 size_t arena_size,
+                                 const uint8_t *bytes,
+                                 size_t len,
+                                 mlmap_qtable_t **qtable,
+                                 mlmap_error_t *detail);
+
+/**
+ * Reports what a quantized table holds.
+ *
+ * @param qtable A handle from mlmap_qtable_init().
+ * @param[out] info Receives the description; must not overlap the arena or the bytes.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_QTABLE`, `MLMAP_ERR_MOVED`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_qtable_info(const mlmap_qtable_t *qtable,
+                                 mlmap_qtable_info_t *info);
+
+/**
+ * The quantization of one class: a code `q` stands for the logit `(q - zero_point) *
+ * scale` (in `float`: `(float)(q - zero_point) * scale`).
+ *
+ * @param qtable A handle from mlmap_qtable_init().
+ * @param class_index The class, below K.
+ * @param[out] scale Receives the class's scale.
+ * @param[out] zero_point Receives the class's zero point.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_QTABLE`, `MLMAP_ERR_MOVED`, `MLMAP_ERR_CLASS_INDEX`,
+ *   `MLMAP_ERR_OVERLAP` (the outputs overlap each other, the arena or the bytes).
+ */
+mlmap_status_t mlmap_qtable_params(const mlmap_qtable_t *qtable,
+                                   size_t class_index,
+                                   float *scale,
+                                   int32_t *zero_point);
+
+/**
+ * Scores one detection of int8 codes with `head` (an ::mlmap_head_t value): the
+ * scores of the float table's head on the dequantized logits `(q - zero_point) *
+ * scale`, bit for bit those of the Rust `QTable` and of `mlmap apply --quantized`.
+ * ML and MAP are K lookups and the normalisation (no `exp`); Bayes and open keep the
+ * softmax's `exp`.
+ *
+ * @param qtable A handle from mlmap_qtable_init() of an 8-bit section.
+ * @param head `MLMAP_HEAD_ML`, `_MAP`, `_BAYES` or `_OPEN`.
+ * @param codes The detection's K codes.
+ * @param n_codes Number of codes; must be K.
+ * @param objectness The detection's objectness, in [0, 1].
+ * @param[out] out Receives the K scores; may overlap `codes` in any way (they are
+ *   copied first), must not overlap the arena or the section's bytes.
+ * @param out_len Number of floats at `out`, at least K.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_QTABLE`, `MLMAP_ERR_MOVED`, `MLMAP_ERR_CODE_WIDTH` (a 16-bit
+ *   section), `MLMAP_ERR_UNKNOWN_HEAD`, `MLMAP_ERR_LENGTH`,
+ *   `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`, `MLMAP_ERR_OBJECTNESS`,
+ *   `MLMAP_ERR_NO_BAYES_HEAD`, `MLMAP_ERR_NO_OPEN_HEAD`.
+ */
+mlmap_status_t mlmap_qscore_i8(const mlmap_qtable_t *qtable,
+                               int32_t head,
+                               const int8_t *codes,
+                               size_t n_codes,
+                               float objectness,
+                               float *out,
+                               size_t out_len);
+
+/**
+ * Scores one detection of int16 codes: as mlmap_qscore_i8() for a 16-bit section.
+ *
+ * @param qtable A handle from mlmap_qtable_init() of a 16-bit section.
+ * @param head `MLMAP_HEAD_ML`, `_MAP`, `_BAYES` or `_OPEN`.
+ * @param codes The detection's K codes.
+ * @param n_codes Number of codes; must be K.
+ * @param objectness The detection's objectness, in [0, 1].
+ * @param[out] out Receives the K scores.
+ * @param out_len Number of floats at `out`, at least K.
+ * @return As mlmap_qscore_i8() (`MLMAP_ERR_CODE_WIDTH` for an 8-bit section).
+ */
+mlmap_status_t mlmap_qscore_i16(const mlmap_qtable_t *qtable,
+                                int32_t head,
+                                const int16_t *codes,
+                                size_t n_codes,
+                                float objectness,
+                                float *out,
+                                size_t out_len);
+
+/**
+ * Scores a batch of int8 codes: row `r` of `codes` (row-major, `rows` x K) and
+ * `objectness[r]` into row `r` of `out`, each row as mlmap_qscore_i8().
+ *
+ * Every argument is checked before anything is written (nothing is written on a
+ * failed check, `*done` included). On a row that cannot be scored (bad objectness)
+ * the rows before it are written, its status is returned and `*done` is its index.
+ * The scores must not overlap the codes, the objectness, `done`, the arena or the
+ * section's bytes (`MLMAP_ERR_OVERLAP`): a batch does not copy its inputs.
+ *
+ * @param qtable A handle from mlmap_qtable_init() of an 8-bit section.
+ * @param head `MLMAP_HEAD_ML`, `_MAP`, `_BAYES` or `_OPEN`.
+ * @param codes `rows * n_codes` codes, row-major.
+ * @param rows Number of detections (0 is allowed).
+ * @param n_codes Codes per row; must be K.
+ * @param objectness `rows` floats, or NULL for an objectness of 1 everywhere.
+ * @param[out] out Receives `rows * K` scores.
+ * @param out_len Number of floats at `out`, at least `rows * K`.
+ * @param[out] done If not NULL, receives the number of rows written.
+ * @return As mlmap_qscore_i8(), and `MLMAP_ERR_TOO_LARGE`.
+ */
+mlmap_status_t mlmap_qscore_i8_batch(const mlmap_qtable_t *qtable,
+                                     int32_t head,
+                                     const int8_t *codes,
+                                     size_t rows,
+                                     size_t n_codes,
+                                     const float *objectness,
+                                     float *out,
+                                     size_t out_len,
+                                     size_t *done);
+
+/**
+ * Scores a batch of int16 codes: as mlmap_qscore_i8_batch() for a 16-bit section.
+ *
+ * @param qtable A handle from mlmap_qtable_init() of a 16-bit section.
+ * @param head `MLMAP_HEAD_ML`, `_MAP`, `_BAYES` or `_OPEN`.
+ * @param codes `rows * n_codes` codes, row-major.
+ * @param rows Number of detections.
+ * @param n_codes Codes per row; must be K.
+ * @param objectness `rows` floats, or NULL for 1 everywhere.
+ * @param[out] out Receives `rows * K` scores.
+ * @param out_len Number of floats at `out`.
+ * @param[out] done If not NULL, receives the number of rows written.
+ * @return As mlmap_qscore_i8_batch().
+ */
+mlmap_status_t mlmap_qscore_i16_batch(const mlmap_qtable_t *qtable,
+                                      int32_t head,
+                                      const int16_t *codes,
+                                      size_t rows,
+                                      size_t n_codes,
+                                      const float *objectness,
+                                      float *out,
+                                      size_t out_len,
+                                      size_t *done);
+
+/**
+ * The dequantized logits of K codes (what the scores are exact for): pass them with
+ * the scores to mlmap_decide(), whose tie rule compares logits, since classes may have
+ * different scales.
+ *
+ * @param qtable A handle from mlmap_qtable_init() of an 8-bit section.
+ * @param codes The detection's K codes.
+ * @param n_codes Number of codes; must be K.
+ * @param[out] logits Receives the K logits; may overlap `codes` (copied first), must
+ *   not overlap the arena or the section's bytes.
+ * @param logits_len Number of floats at `logits`, at least K.
+ * @return `MLMAP_OK`; `MLMAP_ERR_NULL_POINTER`, `MLMAP_ERR_MISALIGNED`,
+ *   `MLMAP_ERR_NO_QTABLE`, `MLMAP_ERR_MOVED`, `MLMAP_ERR_CODE_WIDTH`,
+ *   `MLMAP_ERR_LENGTH`, `MLMAP_ERR_BUFFER_TOO_SMALL`, `MLMAP_ERR_OVERLAP`.
+ */
+mlmap_status_t mlmap_qlogits_i8(const mlmap_qtable_t *qtable,
+                                const int8_t *codes,
+                                size_t n_codes,
+                                float *logits,
+                                size_t logits_len);
+
+/**
+ * The dequantized logits of K int16 codes: as mlmap_qlogits_i8() for a 16-bit section.
+ *
+ * @param qtable A handle from mlmap_qtable_init() of a 16-bit section.
+ * @param codes The detection's K codes.
+ * @param n_codes Number of codes; must be K.
+ * @param[out] logits Receives the K logits.
+ * @param logits_len Number of floats at `logits`, at least K.
+ * @return As mlmap_qlogits_i8().
+ */
+mlmap_status_t mlmap_qlogits_i16(const mlmap_qtable_t *qtable,
+                                 const int16_t *codes,
+                                 size_t n_codes,
+                                 float *logits,
+                                 size_t logits_len);
 
 /**
  * Scores one detection with the ML head: `out[i] = OS (L_i + lambda) / sum_j (L_j +

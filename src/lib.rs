@@ -72,13 +72,14 @@ pub use mlmap_core::baseline;
 /// LiDAR range-view and reflectance-view maps (docs/DESIGN.md §9).
 pub use mlmap_core::lidar;
 pub use mlmap_core::{
-    argmax, check_class_name, check_class_names, decide, objectness_logit, refused_char,
-    scores_from_evidence, Axis, Backend, BatchError, BayesView, Bounded, BoundedTable, CharKind,
-    ClassName, ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head,
-    Histogram, HistogramError, InferError, Knot, Libm, MapError, NameError, OpenParams, RecalMap,
-    Scores, Settings, Table, TableError, TableView, UpperTail, FORMAT_VERSION,
-    FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON, MAX_KNOTS, MAX_LAMBDA, MAX_LAMBDA_BAYES,
-    MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX, NAME_RULE_VERSION, VARIANCE_FLOOR,
+    argmax, check_class_name, check_class_names, decide, locate_malformed, objectness_logit,
+    refused_char, scores_from_evidence, Axis, Backend, BatchError, BayesView, BodyPart, Bounded,
+    BoundedTable, CharKind, ClassName, ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian,
+    GaussianError, Head, Histogram, HistogramError, InferError, Knot, Libm, MapError, NameError,
+    OpenParams, RecalMap, Scores, Settings, Table, TableError, TableView, UpperTail,
+    FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON, MAX_KNOTS, MAX_LAMBDA,
+    MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX, NAME_RULE_VERSION,
+    VARIANCE_FLOOR,
 };
 
 pub mod embedded;

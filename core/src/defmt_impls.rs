@@ -89,6 +89,15 @@ impl Format for CharKind {
     }
 }
 
+impl Format for crate::BodyPart {
+    fn format(&self, f: Formatter<'_>) {
+        match *self {
+            Self::Class { index } => write!(f, "{=str} {}", self.describe(), index),
+            _ => write!(f, "{=str}", self.describe()),
+        }
+    }
+}
+
 impl Format for DecodeError {
     fn format(&self, f: Formatter<'_>) {
         let m = self.message();
@@ -136,6 +145,13 @@ impl Format for InferError {
             | Self::Evidence
             | Self::NoBayesHead
             | Self::NoOpenHead => write!(f, "{=str}", m),
+            Self::CodeWidth { expected, found } => {
+                write!(
+                    f,
+                    "{=str} ({}-bit codes, section {}-bit)",
+                    m, found, expected
+                )
+            }
         }
     }
 }

@@ -120,3 +120,36 @@ impl Format for R0 {
         }
     }
 }
+
+impl Format for crate::lent::LentQTable<'_, '_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "LentQTable {{ K: {}, bits: {}, categories: {} }}",
+            self.k(),
+            self.bits(),
+            self.categories()
+        )
+    }
+}
+
+impl Format for crate::lent::QClass<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "QClass {{ scale: {}, zero point: {}, first ML code: {}, first MAP code: {} }}",
+            self.scale, self.zero_point, self.ml_start, self.map_start
+        )
+    }
+}
+
+impl Format for crate::lent::QLogit<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "QLogit {{ first code: {}, index bytes: {} }}",
+            self.start,
+            self.index.len()
+        )
+    }
+}

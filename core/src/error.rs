@@ -294,6 +294,61 @@ pub enum DecodeError {
     Invalid(TableError),
 }
 
+/// The part of a table a decode that gave [`DecodeError::Malformed`] was reading when
+/// the bytes stopped following the format ([`locate_malformed`](crate::locate_malformed)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum BodyPart {
+    /// The header (the Bayes head's shape, stored after the fixed fields).
+    Header,
+    /// The body is shorter than the frequencies and terms the header announces.
+    Length,
+    /// The settings (lambdas, the edge mode and upper tail codes).
+    Settings,
+    /// The record of one class (name, rows, prior, histograms), or a class record
+    /// beyond the header's number of classes.
+    Class {
+        /// Index of the class.
+        index: u16,
+    },
+    /// The Bayes head (lambda, category rows, axes, log-terms).
+    Bayes,
+    /// The objectness feature (DESIGN §1.6).
+    Objectness,
+    /// The open head's temperature and epsilon.
+    Open,
+    /// The recalibration maps (DESIGN §1.9).
+    Maps,
+    /// Bytes left over after the last part.
+    Trailing,
+}
+
+impl BodyPart {
+    /// A few words naming the part, shared by `Display` users and `defmt`.
+    pub const fn describe(self) -> &'static str {
+        match self {
+            Self::Header => "header (Bayes shape)",
+            Self::Length => "body length (shorter than the header's shape)",
+            Self::Settings => "settings",
+            Self::Class { .. } => "class record",
+            Self::Bayes => "Bayes head",
+            Self::Objectness => "objectness feature",
+            Self::Open => "open head parameters",
+            Self::Maps => "recalibration maps",
+            Self::Trailing => "bytes after the last part",
+        }
+    }
+}
+
+impl fmt::Display for BodyPart {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Self::Class { index } => write!(f, "class record {index}"),
+            _ => f.write_str(self.describe()),
+        }
+    }
+}
+
 impl DecodeError {
     /// The one sentence describing the variant, without its fields.
     pub const fn message(self) -> &'static str {
@@ -426,6 +481,14 @@ pub enum InferError {
         /// Index of the first NaN score.
         class: u16,
     },
+    /// Quantized codes of another width than the section's (`i16` codes given to an
+    /// 8-bit section, or `i8` codes to a 16-bit one).
+    CodeWidth {
+        /// Bits per code of the section.
+        expected: u8,
+        /// Bits per code given.
+        found: u8,
+    },
 }
 
 impl InferError {
@@ -440,6 +503,7 @@ impl InferError {
             Self::NoOpenHead => "the table has no open head",
             Self::CodeRange { .. } => "a quantized logit is outside the section's code range",
             Self::NanScore { .. } => "a score is NaN",
+            Self::CodeWidth { .. } => "the codes' width is not the quantized section's",
         }
     }
 }
@@ -458,6 +522,10 @@ impl fmt::Display for InferError {
                 "quantized logit of class {class} is outside the section's code range"
             ),
             Self::NanScore { class } => write!(f, "score of class {class} is NaN"),
+            Self::CodeWidth { expected, found } => write!(
+                f,
+                "the codes are {found}-bit and the quantized section's are {expected}-bit"
+            ),
         }
     }
 }

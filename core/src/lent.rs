@@ -7,6 +7,9 @@
 //! [`LentTable`] lends that storage to the one decoder (`Slots`), which fills and
 //! validates it, and the result is a [`TableView`], the one implementation of scoring.
 //! The same bytes give the same result as `DynTable::from_bytes`, error included.
+//!
+//! [`LentQTable`] does the same for a quantized section: its per-class records in lent
+//! storage, its masses and terms read in place from the section's bytes.
 
 use crate::bayes::BayesView;
 use crate::error::{DecodeError, Head, TableError};
@@ -16,6 +19,8 @@ use crate::name::ClassName;
 use crate::recal::{Knot, Maps, MAX_KNOTS};
 use crate::view::{BayesStorage, Slots, TableView};
 use crate::wire::{self, BayesSlots, BodySink, ClassFields, Header, Settings};
+
+pub use crate::qtable::{LentQTable, QClass, QLogit, EMPTY_QCLASS, EMPTY_QLOGIT};
 
 /// A placeholder class name (empty, invalid) for storage the decoder fills.
 pub const EMPTY_NAME: ClassName = ClassName::EMPTY;

@@ -82,7 +82,9 @@ pub use conformal::{
     conformal_section_len, set_words, threshold_rank, write_conformal_section, ConformalError,
     ConformalSpec, CONFORMAL_MAGIC, CONFORMAL_VERSION,
 };
-pub use error::{BatchError, DecodeError, EncodeError, Head, InferError, MapError, TableError};
+pub use error::{
+    BatchError, BodyPart, DecodeError, EncodeError, Head, InferError, MapError, TableError,
+};
 pub use gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
 pub use histogram::{
     Axis, EdgeMode, Histogram, HistogramError, UpperTail, FREQUENCY_SUM_TOLERANCE,
@@ -108,7 +110,7 @@ pub use recal::{Knot, RecalMap, MAX_KNOTS};
 pub use sections::{section_of, table_of};
 pub use table::Table;
 pub use view::TableView;
-pub use wire::{ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
+pub use wire::{locate_malformed, ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
 
 #[cfg(feature = "alloc")]
 #[cfg_attr(docsrs, doc(cfg(feature = "alloc")))]

@@ -44,6 +44,7 @@ use crate::view::TableView;
 
 mod parse;
 
+pub use parse::locate_malformed;
 #[cfg(test)]
 pub(crate) use parse::parse_body;
 pub(crate) use parse::{parse_body_into, BayesSlots, BodySink, ClassFields, Parts};

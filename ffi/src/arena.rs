@@ -17,8 +17,11 @@ use mlmap::lent::{
     empty_histogram, ArenaLayout, LentBayes, LentTable, StorageShape, EMPTY_AXIS, EMPTY_KNOT,
     EMPTY_NAME, EMPTY_PRIOR, EMPTY_SETTINGS,
 };
-use mlmap::{Axis, ClassName, DecodeError, Gaussian, Histogram, Knot, Settings, TableView};
+use mlmap::{
+    Axis, ClassName, DecodeError, Gaussian, Histogram, Knot, QTableError, Settings, TableView,
+};
 
+use super::detail::{self, mlmap_field_t};
 use super::mlmap_status_t::{self, *};
 use super::{check_ptr, mlmap_table_t};
 
@@ -69,19 +72,42 @@ const _: () = assert!(
 /// Alignment of an arena in bytes.
 pub(crate) const ARENA_ALIGN: usize = 8;
 
-/// Where a decode failed: the status, and the error of the decoder when it had one.
+/// Where a decode failed: the status, the field, head and class it is about
+/// (`mlmap_error_t`), and the bytes the table needs when known.
 pub(crate) struct Failure {
     pub(crate) status: mlmap_status_t,
-    pub(crate) error: Option<DecodeError>,
+    pub(crate) at: (mlmap_field_t, i32, i32),
     /// Bytes the table needs, when known.
     pub(crate) needed: usize,
+}
+
+impl Failure {
+    /// Storage smaller than the `needed` bytes.
+    pub(crate) fn too_small(needed: usize) -> Self {
+        Self {
+            status: MLMAP_ERR_STORAGE_TOO_SMALL,
+            at: (mlmap_field_t::MLMAP_FIELD_STORAGE, -1, -1),
+            needed,
+        }
+    }
+
+    /// A decode error of `bytes`; a malformed body is located by a second parse.
+    pub(crate) fn decoding(e: DecodeError, bytes: &[u8]) -> Self {
+        let mut f = Self::from(e);
+        if e == DecodeError::Malformed {
+            if let Some(part) = mlmap::locate_malformed(bytes) {
+                f.at = detail::locate_part(part);
+            }
+        }
+        f
+    }
 }
 
 impl From<mlmap_status_t> for Failure {
     fn from(status: mlmap_status_t) -> Self {
         Self {
             status,
-            error: None,
+            at: (mlmap_field_t::MLMAP_FIELD_NONE, -1, -1),
             needed: 0,
         }
     }
@@ -91,7 +117,17 @@ impl From<DecodeError> for Failure {
     fn from(e: DecodeError) -> Self {
         Self {
             status: e.into(),
-            error: Some(e),
+            at: detail::locate(e),
+            needed: 0,
+        }
+    }
+}
+
+impl From<QTableError> for Failure {
+    fn from(e: QTableError) -> Self {
+        Self {
+            status: e.into(),
+            at: crate::quantized::locate(e),
             needed: 0,
         }
     }
@@ -151,11 +187,7 @@ pub(crate) unsafe fn decode_into(
 ) -> Result<(), Failure> {
     let l = layout(shape)?;
     if l.size > size {
-        return Err(Failure {
-            status: MLMAP_ERR_STORAGE_TOO_SMALL,
-            error: None,
-            needed: l.size,
-        });
+        return Err(Failure::too_small(l.size));
     }
     let k = shape.classes;
     let bayes = shape.bins_bayes > 0;
@@ -230,7 +262,8 @@ pub(crate) unsafe fn decode_into(
         bayes,
         knots: lent_knots,
     }
-    .decode(bytes)?;
+    .decode(bytes)
+    .map_err(|e| Failure::decoding(e, bytes))?;
     let control = arena.cast::<Control>();
     // SAFETY: the control block is the first `ArenaLayout::control(P)` bytes, disjoint
     // from every region, aligned (checked above); the view borrows the regions for as

@@ -17,7 +17,7 @@ use super::{check_ptr, max_table_bytes, mlmap_table_t, overlap, status};
 
 /// Whether `n` bytes at `at` can describe memory: at most `PTRDIFF_MAX` bytes, not past
 /// the end of the address space.
-fn describes_memory(at: usize, n: usize) -> bool {
+pub(crate) fn describes_memory(at: usize, n: usize) -> bool {
     n <= isize::MAX as usize && at.checked_add(n).is_some()
 }
 
@@ -74,11 +74,7 @@ unsafe fn decode(
     check_ptr(storage.cast::<u64>())?;
     check_ptr(bytes)?;
     if size < need {
-        return Err(Failure {
-            status: MLMAP_ERR_STORAGE_TOO_SMALL,
-            error: None,
-            needed: need,
-        });
+        return Err(Failure::too_small(need));
     }
     let (s, b) = (storage as usize, bytes as usize);
     if !describes_memory(s, size) || !describes_memory(b, len) {
@@ -93,7 +89,7 @@ unsafe fn decode(
     unsafe { arena::clear(storage) };
     // SAFETY: the caller promises `len` readable bytes, disjoint from the storage.
     let bytes = unsafe { core::slice::from_raw_parts(bytes, len) };
-    let shape = StorageShape::of(bytes, limit)?;
+    let shape = StorageShape::of(bytes, limit).map_err(|e| Failure::decoding(e, bytes))?;
     // SAFETY: aligned, `size` bytes of the caller's, disjoint from the bytes (checked).
     unsafe { arena::decode_into(storage, size, bytes, &shape, need) }?;
     Ok(arena::layout(&shape).map_or(0, |l| l.size))
@@ -268,7 +264,7 @@ unsafe fn arena_size(bytes: *const u8, len: usize, size: *mut usize) -> Result<u
     }
     // SAFETY: `len` readable bytes (the caller's promise).
     let b = unsafe { core::slice::from_raw_parts(bytes, len) };
-    let shape = StorageShape::of(b, scoring_limit)?;
+    let shape = StorageShape::of(b, scoring_limit).map_err(|e| Failure::decoding(e, b))?;
     let n = arena::layout(&shape)?.size;
     // SAFETY: non-NULL, aligned, disjoint from the bytes (checked).
     unsafe { size.write(n) };

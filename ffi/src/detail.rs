@@ -4,7 +4,7 @@
 use core::ffi::c_char;
 use core::mem::size_of;
 
-use mlmap::{DecodeError, Head, TableError};
+use mlmap::{BodyPart, DecodeError, Head, TableError};
 
 use super::arena::Failure;
 use super::mlmap_status_t::{self, *};
@@ -17,7 +17,8 @@ use super::{check_ptr, overlap};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum mlmap_field_t {
     /// No field: success, or a failure of the whole input (magic, CRC, version, a body
-    /// that does not parse: the parser reports no position) or of an argument.
+    /// whose parts all parse but one is not in its shortest encoding) or of an
+    /// argument.
     MLMAP_FIELD_NONE = 0,
     /// A histogram's edges (`head`, `class_index`).
     MLMAP_FIELD_EDGES = 1,
@@ -54,6 +55,38 @@ pub enum mlmap_field_t {
     MLMAP_FIELD_OBJECTNESS = 16,
     /// The storage is smaller than the table needs (`needed`).
     MLMAP_FIELD_STORAGE = 17,
+    /// A quantized class's scale (`class_index`).
+    MLMAP_FIELD_SCALE = 18,
+    /// A quantized class's zero point (`class_index`).
+    MLMAP_FIELD_ZERO_POINT = 19,
+    /// A quantized class's (or logit's) window of codes (`class_index`).
+    MLMAP_FIELD_CODE_WINDOW = 20,
+    /// A quantized code's bin index (`class_index`: the class or logit).
+    MLMAP_FIELD_BIN_INDEX = 21,
+    /// A quantized mass (`class_index`).
+    MLMAP_FIELD_MASS = 22,
+    /// A quantized Bayes log-term, log prior or log lambda (`class_index`: the logit or
+    /// category, 0 for the header's).
+    MLMAP_FIELD_LOG_TERM = 23,
+    /// A quantized open head's unknown log-score.
+    MLMAP_FIELD_LOG_UNKNOWN = 24,
+    /// The checksum of the table a quantized section follows is not the one it was
+    /// computed from.
+    MLMAP_FIELD_TABLE_CRC = 25,
+    /// Malformed: the table body ends inside, or breaks the syntax of, the settings.
+    MLMAP_FIELD_SETTINGS = 26,
+    /// Malformed: a class record (`class_index`; K when a record follows the K
+    /// announced).
+    MLMAP_FIELD_CLASS_RECORD = 27,
+    /// Malformed: the Bayes head's data (lambda, rows, axes, log-terms).
+    MLMAP_FIELD_BAYES_DATA = 28,
+    /// Malformed: the open head's parameters.
+    MLMAP_FIELD_OPEN_PARAMS = 29,
+    /// Malformed: bytes left over after the last part.
+    MLMAP_FIELD_TRAILING_BYTES = 30,
+    /// Malformed: the header (the Bayes shape after the fixed fields), or a body
+    /// shorter than the header's shape.
+    MLMAP_FIELD_HEADER = 31,
 }
 
 use mlmap_field_t::*;
@@ -85,8 +118,24 @@ fn head_code(h: Head) -> i32 {
     }
 }
 
+/// The field, head and class of the part where a malformed table stops following the
+/// format.
+pub(crate) fn locate_part(part: BodyPart) -> (mlmap_field_t, i32, i32) {
+    match part {
+        BodyPart::Header | BodyPart::Length => (MLMAP_FIELD_HEADER, -1, -1),
+        BodyPart::Settings => (MLMAP_FIELD_SETTINGS, -1, -1),
+        BodyPart::Class { index } => (MLMAP_FIELD_CLASS_RECORD, -1, i32::from(index)),
+        BodyPart::Bayes => (MLMAP_FIELD_BAYES_DATA, 2, -1),
+        BodyPart::Objectness => (MLMAP_FIELD_OBJECTNESS, 2, -1),
+        BodyPart::Open => (MLMAP_FIELD_OPEN_PARAMS, 3, -1),
+        BodyPart::Maps => (MLMAP_FIELD_MAP, -1, -1),
+        BodyPart::Trailing => (MLMAP_FIELD_TRAILING_BYTES, -1, -1),
+        _ => (MLMAP_FIELD_NONE, -1, -1),
+    }
+}
+
 /// The field, head and class of a decode error.
-fn locate(e: DecodeError) -> (mlmap_field_t, i32, i32) {
+pub(crate) fn locate(e: DecodeError) -> (mlmap_field_t, i32, i32) {
     let c = i32::from;
     match e {
         DecodeError::ShapeMismatch { .. } => (MLMAP_FIELD_SHAPE, -1, -1),
@@ -139,11 +188,7 @@ pub(crate) unsafe fn report(
             needed,
         },
         Err(f) => {
-            let (field, head, class_index) = match f.error {
-                Some(e) => locate(e),
-                None if f.status == MLMAP_ERR_STORAGE_TOO_SMALL => (MLMAP_FIELD_STORAGE, -1, -1),
-                None => (MLMAP_FIELD_NONE, -1, -1),
-            };
+            let (field, head, class_index) = f.at;
             mlmap_error_t {
                 status: f.status,
                 field,
@@ -194,6 +239,20 @@ pub extern "C" fn mlmap_field_str(field: i32) -> *const c_char {
         15 => c"table shape",
         16 => c"objectness feature",
         17 => c"storage size",
+        18 => c"quantized scale",
+        19 => c"quantized zero point",
+        20 => c"quantized window of codes",
+        21 => c"quantized bin index",
+        22 => c"quantized mass",
+        23 => c"quantized Bayes log-term",
+        24 => c"quantized open head unknown log-score",
+        25 => c"checksum of the table a section follows",
+        26 => c"settings (malformed)",
+        27 => c"class record (malformed)",
+        28 => c"Bayes head data (malformed)",
+        29 => c"open head parameters (malformed)",
+        30 => c"bytes after the last part (malformed)",
+        31 => c"header (malformed)",
         _ => c"unknown field",
     };
     s.as_ptr()

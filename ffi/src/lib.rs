@@ -48,6 +48,7 @@ mod decide;
 mod decode;
 mod detail;
 mod monitor;
+mod quantized;
 mod score;
 mod status;
 pub use conformal::*;
@@ -55,6 +56,7 @@ pub use decide::*;
 pub use decode::*;
 pub use detail::*;
 pub use monitor::*;
+pub use quantized::*;
 pub use score::*;
 
 use arena::{table_ref, View};

@@ -81,7 +81,7 @@ pub enum mlmap_status_t {
     /// The monitor storage holds no monitor (mlmap_monitor_init() did not succeed on it).
     MLMAP_ERR_NO_MONITOR = 26,
     /// The bytes hold no section of the kind asked for (a monitor section: magic MLMW;
-    /// a conformal section: magic MLMS).
+    /// a conformal section: magic MLMS; a quantized section: magic MLMQ).
     MLMAP_ERR_NO_SECTION = 27,
     /// A section breaks its format or does not belong to the table (another shape or
     /// table CRC, a window of 0, a threshold or share out of range).
@@ -89,14 +89,23 @@ pub enum mlmap_status_t {
     /// The conformal storage holds no conformal handle (mlmap_conformal_init() did not
     /// succeed on it).
     MLMAP_ERR_NO_CONFORMAL = 29,
-    /// The table storage was copied or moved after its decode: it holds pointers into
-    /// itself, so only the storage decoded into is a table (decode again instead).
+    /// The table storage (or a quantized arena) was copied or moved after its decode:
+    /// it holds pointers into itself, so only the storage decoded into is a table
+    /// (decode again instead).
     MLMAP_ERR_MOVED = 30,
+    /// Quantized scoring: codes of another width than the section's (an `_i8` call on
+    /// a 16-bit section, or an `_i16` call on an 8-bit one).
+    MLMAP_ERR_CODE_WIDTH = 31,
+    /// A `head` argument is not one of the ::mlmap_head_t values.
+    MLMAP_ERR_UNKNOWN_HEAD = 32,
+    /// The quantized arena holds no quantized table (mlmap_qtable_init() did not
+    /// succeed on it).
+    MLMAP_ERR_NO_QTABLE = 33,
 }
 
 /// Statuses in code order (tests and `mlmap_status_str`).
 #[doc(hidden)]
-pub const ALL_STATUSES: [mlmap_status_t; 31] = [
+pub const ALL_STATUSES: [mlmap_status_t; 34] = [
     MLMAP_OK,
     MLMAP_ERR_NULL_POINTER,
     MLMAP_ERR_MISALIGNED,
@@ -128,6 +137,9 @@ pub const ALL_STATUSES: [mlmap_status_t; 31] = [
     MLMAP_ERR_INVALID_SECTION,
     MLMAP_ERR_NO_CONFORMAL,
     MLMAP_ERR_MOVED,
+    MLMAP_ERR_CODE_WIDTH,
+    MLMAP_ERR_UNKNOWN_HEAD,
+    MLMAP_ERR_NO_QTABLE,
 ];
 
 impl From<DecodeError> for mlmap_status_t {
@@ -159,6 +171,7 @@ impl From<InferError> for mlmap_status_t {
             InferError::NoBayesHead => MLMAP_ERR_NO_BAYES_HEAD,
             InferError::NoOpenHead => MLMAP_ERR_NO_OPEN_HEAD,
             InferError::NanScore { .. } => MLMAP_ERR_NAN_SCORE,
+            InferError::CodeWidth { .. } => MLMAP_ERR_CODE_WIDTH,
             _ => MLMAP_ERR_LENGTH,
         }
     }
@@ -203,10 +216,13 @@ pub extern "C" fn mlmap_status_str(status: i32) -> *const c_char {
         24 => c"open head: the temperature is not in [1e-6, 1e6]",
         25 => c"open head: epsilon is neither 0 nor in [1.1754944e-38, 1e30]",
         26 => c"the monitor storage holds no monitor",
-        27 => c"input holds no section of this kind (monitor: magic MLMW; conformal: magic MLMS)",
+        27 => c"input holds no section of this kind (monitor: magic MLMW; conformal: magic MLMS; quantized: magic MLMQ)",
         28 => c"a section breaks its format or belongs to another table",
         29 => c"the conformal storage holds no conformal handle",
         30 => c"the table storage was copied or moved after its decode (decode it again)",
+        31 => c"the codes' width is not the quantized section's",
+        32 => c"head is not one of the MLMAP_HEAD_* values",
+        33 => c"the quantized arena holds no quantized table",
         _ => c"unknown mlmap status",
     };
     s.as_ptr()

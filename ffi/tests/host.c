@@ -119,7 +119,7 @@ static void test_limits_and_status_strings(void) {
     /* Every status has its own non-empty description; anything else is unknown. */
     const char *unknown = mlmap_status_str(-1);
     CHECK(unknown != NULL && strcmp(unknown, "unknown mlmap status") == 0);
-    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_MOVED + 1), unknown) == 0);
+    CHECK(strcmp(mlmap_status_str(MLMAP_ERR_NO_QTABLE + 1), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MAX), unknown) == 0);
     CHECK(strcmp(mlmap_status_str(INT32_MIN), unknown) == 0);
     for (int32_t s = MLMAP_OK; s <= MLMAP_ERR_MOVED; s++) {
@@ -1571,12 +1571,42 @@ static void test_error_details(const uint8_t *small, size_t small_len) {
     size_t a0 = class_offset(b, 0, &freqs), a2 = class_offset(b, 2, &freqs);
     (void)a0;
     (void)a2;
-    /* A body that does not parse: malformed, no field. */
+    /* A body that does not parse: malformed, and the part where it stops. Class
+     * sequence of 9 announced in the body, 3 in the header: a fourth record. */
     memcpy(b, small, small_len);
-    b[8 + 10] = 9; /* K in the body: 9 classes announced, 3 present */
+    b[8 + 10] = 9;
     fix_crc(b, small_len);
     EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, &d), MLMAP_ERR_MALFORMED);
-    CHECK(d.status == MLMAP_ERR_MALFORMED && d.field == MLMAP_FIELD_NONE);
+    CHECK(d.status == MLMAP_ERR_MALFORMED && d.field == MLMAP_FIELD_CLASS_RECORD &&
+          d.class_index == 3 && d.head == -1);
+    /* An edge-mode code of 7 in the settings (bytes 8..18: edge mode, upper tail, the
+     * two lambdas). */
+    memcpy(b, small, small_len);
+    b[8] = 7;
+    fix_crc(b, small_len);
+    EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, &d), MLMAP_ERR_MALFORMED);
+    CHECK(d.field == MLMAP_FIELD_SETTINGS && d.class_index == -1);
+    /* Class 1's name not UTF-8 (its first byte 0xFF). */
+    memcpy(b, small, small_len);
+    size_t name1 = 8 + 10 + 1;
+    name1 += 1 + b[name1];                        /* class 0's name */
+    while (b[name1] & 0x80u) name1++;             /* its rows */
+    name1 += 1 + 16 + 1 + 4 * (size_t)b[6] + 8 + 1 + 4 * (size_t)b[7];
+    CHECK(b[name1] > 0 && b[name1] < 32);          /* the length of class 1's name */
+    b[name1 + 1] = 0xFF;
+    fix_crc(b, small_len);
+    EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, &d), MLMAP_ERR_MALFORMED);
+    CHECK(d.field == MLMAP_FIELD_CLASS_RECORD && d.class_index == 1);
+    /* One byte more after the last class: trailing bytes. */
+    uint8_t *longer = malloc(small_len + 1);
+    memcpy(longer, small, small_len - 4);
+    longer[small_len - 4] = 0;
+    fix_crc(longer, small_len + 1);
+    EXPECT(mlmap_table_init(arena, sizeof arena, longer, small_len + 1, &t, &d),
+           MLMAP_ERR_MALFORMED);
+    CHECK(d.field == MLMAP_FIELD_TRAILING_BYTES && d.class_index == -1);
+    free(longer);
+    CHECK(strcmp(mlmap_field_str(MLMAP_FIELD_TRAILING_BYTES), "bytes after the last part (malformed)") == 0);
     /* The detail is optional. */
     EXPECT(mlmap_table_init(arena, sizeof arena, b, small_len, &t, NULL), MLMAP_ERR_MALFORMED);
     CHECK(strcmp(mlmap_field_str(99), "unknown field") == 0);

@@ -200,7 +200,7 @@ fn every_status_has_a_distinct_description() {
 #[test]
 fn status_strings_are_the_layers_messages() {
     use mlmap::{DecodeError, InferError, TableError};
-    let cases: [(DecodeErrorOrInfer, &str); 12] = [
+    let cases: [(DecodeErrorOrInfer, &str); 13] = [
         (
             DecodeError::Truncated.into(),
             DecodeError::Truncated.message(),
@@ -249,6 +249,18 @@ fn status_strings_are_the_layers_messages() {
             InferError::NoOpenHead.into(),
             InferError::NoOpenHead.message(),
         ),
+        (
+            InferError::CodeWidth {
+                expected: 8,
+                found: 16,
+            }
+            .into(),
+            InferError::CodeWidth {
+                expected: 8,
+                found: 16,
+            }
+            .message(),
+        ),
     ];
     let mut statuses = std::collections::HashSet::new();
     for (status, message) in cases {
@@ -272,5 +284,79 @@ impl From<mlmap::DecodeError> for DecodeErrorOrInfer {
 impl From<mlmap::InferError> for DecodeErrorOrInfer {
     fn from(e: mlmap::InferError) -> Self {
         Self(e.into())
+    }
+}
+
+/// The quantized calls give `QTable`'s scores bit for bit, every head, for every int8
+/// code of each class against a spread of the others, one detection and in a batch.
+#[test]
+fn quantized_calls_equal_the_rust_qtable_bit_for_bit() {
+    const Q8: &[u8] = include_bytes!("../../tables/default_q8.mlmap");
+    let rust = mlmap::QTable::<3, i8>::from_bytes(Q8).unwrap();
+    let mut arena = Box::new(Storage([0; 128 * 1024]));
+    let mut size = 0usize;
+    // SAFETY: the bytes, and a `size_t`.
+    let s =
+        unsafe { mlmap_qtable_arena_size(Q8.as_ptr(), Q8.len(), &mut size, std::ptr::null_mut()) };
+    assert_eq!(s, mlmap_status_t::MLMAP_OK);
+    assert_eq!(size, 96 + 24 * 8 + 3 * (16 + 11 * 8));
+    let mut q: *mut mlmap_qtable_t = std::ptr::null_mut();
+    // SAFETY: 8-aligned storage of `size` bytes, the bytes, outputs.
+    let s = unsafe {
+        mlmap_qtable_init(
+            arena.0.as_mut_ptr().cast(),
+            size,
+            Q8.as_ptr(),
+            Q8.len(),
+            &mut q,
+            std::ptr::null_mut(),
+        )
+    };
+    assert_eq!(s, mlmap_status_t::MLMAP_OK);
+    let mut rows = Vec::new();
+    for c in 0..3 {
+        for v in i8::MIN..=i8::MAX {
+            let mut codes = [(v as i32 * 7 % 128) as i8, v.wrapping_mul(3), -v / 2];
+            codes[c] = v;
+            rows.push((codes, (v as u8 % 11) as f32 / 10.0));
+        }
+    }
+    let flat: Vec<i8> = rows.iter().flat_map(|(c, _)| *c).collect();
+    let os: Vec<f32> = rows.iter().map(|(_, o)| *o).collect();
+    for head in 0..4i32 {
+        let mut batch = vec![0.0f32; flat.len()];
+        let mut done = 0usize;
+        // SAFETY: `rows` rows of 3 codes, objectness and outputs.
+        let s = unsafe {
+            mlmap_qscore_i8_batch(
+                q,
+                head,
+                flat.as_ptr(),
+                rows.len(),
+                3,
+                os.as_ptr(),
+                batch.as_mut_ptr(),
+                batch.len(),
+                &mut done,
+            )
+        };
+        assert_eq!((s, done), (mlmap_status_t::MLMAP_OK, rows.len()));
+        for (r, (codes, o)) in rows.iter().enumerate() {
+            let want = match head {
+                0 => rust.ml(codes, *o),
+                1 => rust.map(codes, *o),
+                2 => rust.bayes(codes, *o),
+                _ => rust.open(codes, *o),
+            }
+            .unwrap()
+            .0;
+            let mut out = [0.0f32; 3];
+            // SAFETY: 3 codes, 3 floats.
+            let s = unsafe { mlmap_qscore_i8(q, head, codes.as_ptr(), 3, *o, out.as_mut_ptr(), 3) };
+            assert_eq!(s, mlmap_status_t::MLMAP_OK);
+            let bits = |a: &[f32]| a.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&out), bits(&want), "head {head}, codes {codes:?}");
+            assert_eq!(bits(&batch[3 * r..3 * r + 3]), bits(&want), "batch row {r}");
+        }
     }
 }

@@ -52,12 +52,13 @@ use crate::recal::{self, KnotBytes};
 use crate::sections;
 use crate::view::{BayesBackend, OpenBackend};
 
+mod lent;
 mod score;
 mod section;
+pub use lent::{LentQTable, EMPTY_QCLASS, EMPTY_QLOGIT};
 pub(crate) use score::QView;
-pub(crate) use section::{
-    f32_at, index_at, index_width, locate, offset, parse, table_part, Meta, QClass, QLogit,
-};
+pub(crate) use section::{f32_at, index_at, index_width, locate, offset, parse, table_part, Meta};
+pub use section::{QClass, QLogit};
 
 /// The four bytes a quantized section starts with.
 pub const QUANTIZED_MAGIC: [u8; 4] = *b"MLMQ";

@@ -8,7 +8,7 @@ use serde::de::{DeserializeSeed, Deserializer, Error as _, SeqAccess, Visitor};
 use serde::Deserialize;
 
 use super::{Settings, SettingsWire};
-use crate::error::{DecodeError, Head};
+use crate::error::{BodyPart, DecodeError, Head};
 use crate::histogram::Axis;
 use crate::recal::Knot;
 
@@ -52,6 +52,10 @@ pub(crate) trait BodySink<'a> {
     fn counts_only(&self) -> bool {
         false
     }
+    /// The parser is about to read `part` (a no-op but for the sink that locates where a
+    /// malformed body stops following the format, [`locate_malformed`]).
+    #[inline(always)]
+    fn part(&mut self, _part: BodyPart) {}
 }
 
 /// The storage a Bayes head is parsed into (axes get their `lo` and `hi` only).
@@ -117,11 +121,14 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     let malformed = |_| DecodeError::Malformed;
     let mut de = postcard::Deserializer::from_bytes(body);
     // A struct is its fields in order: the settings, then the class sequence.
+    sink.part(BodyPart::Settings);
     let settings = SettingsWire::deserialize(&mut de).map_err(malformed)?;
+    sink.part(BodyPart::Class { index: 0 });
     let classes = ClassesSeed(&mut *sink)
         .deserialize(&mut de)
         .map_err(malformed)?;
     let bayes = if bayes {
+        sink.part(BodyPart::Bayes);
         let lambda = f32::deserialize(&mut de).map_err(malformed)?;
         let count = sink.counts_only();
         let slots = sink.bayes();
@@ -147,6 +154,7 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     // `(lo, hi)`, then its terms).
     let mut objectness = None;
     if bayes.is_some() && maps {
+        sink.part(BodyPart::Objectness);
         let tag = u8::deserialize(&mut de).map_err(malformed)?;
         match tag {
             0 => {}
@@ -164,6 +172,7 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
             _ => return Err(DecodeError::Malformed),
         }
     }
+    sink.part(BodyPart::Open);
     let open = if bayes.is_some() && open {
         Some(<(f32, f32)>::deserialize(&mut de).map_err(malformed)?)
     } else if bayes.is_some() && maps {
@@ -173,6 +182,7 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
     };
     let mut counts = [0usize; 4];
     if maps {
+        sink.part(BodyPart::Maps);
         MapsSeed {
             sink: &mut *sink,
             counts: &mut counts,
@@ -180,10 +190,12 @@ pub(crate) fn parse_body_into<'a, S: BodySink<'a>>(
         .deserialize(&mut de)
         .map_err(malformed)?;
     }
+    sink.part(BodyPart::Trailing);
     let rest = de.finalize().map_err(malformed)?;
     if !rest.is_empty() {
         return Err(DecodeError::Malformed);
     }
+    sink.part(BodyPart::Settings);
     Ok(Parsed {
         settings: settings.to_settings()?,
         classes,
@@ -414,6 +426,9 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for ClassesSeed<'_, S> {
     fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<usize, A::Error> {
         let mut class = 0;
         while class < self.0.capacity() {
+            self.0.part(BodyPart::Class {
+                index: u16::try_from(class).unwrap_or(u16::MAX),
+            });
             let seed = ClassSeed {
                 sink: &mut *self.0,
                 class,
@@ -424,6 +439,9 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for ClassesSeed<'_, S> {
             }
         }
         // Full: any further class is one too many.
+        self.0.part(BodyPart::Class {
+            index: u16::try_from(class).unwrap_or(u16::MAX),
+        });
         match seq.size_hint() {
             Some(0) => Ok(class),
             _ => Err(A::Error::invalid_length(class + 1, &self)),
@@ -504,4 +522,104 @@ impl<'de, S: BodySink<'de>> Visitor<'de> for ClassSeed<'_, S> {
 /// Stores one parsed `f32`.
 fn store(slot: &mut f32, v: f32) {
     *slot = v;
+}
+
+/// A sink that stores nothing and remembers the part being read: where a malformed body
+/// stops following the format.
+struct Locate {
+    k: usize,
+    at: BodyPart,
+}
+
+impl<'a> BodySink<'a> for Locate {
+    fn capacity(&self) -> usize {
+        self.k
+    }
+
+    fn freqs(&mut self, _: usize, _: Head) -> &mut [f32] {
+        &mut []
+    }
+
+    fn class(&mut self, _: usize, _: ClassFields<'a>) {}
+
+    fn bayes(&mut self) -> BayesSlots<'_> {
+        BayesSlots {
+            rows: &mut [],
+            axes: &mut [],
+            terms: &mut [],
+            objectness_axis: &mut [],
+            objectness_terms: &mut [],
+        }
+    }
+
+    fn recal(&mut self, _: usize) -> &mut [Knot] {
+        &mut []
+    }
+
+    fn counts_only(&self) -> bool {
+        true
+    }
+
+    fn part(&mut self, part: BodyPart) {
+        self.at = part;
+    }
+}
+
+/// Where the table in `bytes` (a table file, sections appended allowed) stops following
+/// the format, when decoding it gives [`DecodeError::Malformed`]: the part of the header
+/// or body being read. `None` when every part parses (the bytes decode past the
+/// syntax, or break only the shortest-encoding rule, e.g. an overlong varint) or fail
+/// an earlier check (magic, CRC-32, version).
+///
+/// Decoding reports [`DecodeError::Malformed`] without a position, so that the one body
+/// parser stays free of bookkeeping; this reads the body once more, storing nothing, to
+/// name the part for a diagnostic (the C API's error details, `mlmap inspect`).
+///
+/// # Examples
+///
+/// ```
+/// # use mlmap_core as mlmap;
+/// use mlmap::{locate_malformed, BodyPart};
+///
+/// let good = include_bytes!("../../../tables/default.mlmap");
+/// assert_eq!(locate_malformed(good), None);
+/// // One byte more at the end of the body (the CRC-32 recomputed): trailing bytes.
+/// let mut bytes = good[..good.len() - 4].to_vec();
+/// bytes.push(0);
+/// let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&bytes);
+/// bytes.extend_from_slice(&crc.to_le_bytes());
+/// assert_eq!(locate_malformed(&bytes), Some(BodyPart::Trailing));
+/// ```
+pub fn locate_malformed(bytes: &[u8]) -> Option<BodyPart> {
+    let (header, body) = match super::open(crate::sections::table_part(bytes)) {
+        Ok(h) => h,
+        Err(DecodeError::Malformed) => return Some(BodyPart::Header),
+        Err(_) => return None,
+    };
+    let shape = crate::lent::StorageShape {
+        classes: usize::from(header.k),
+        bins_ml: usize::from(header.bins_ml),
+        bins_map: usize::from(header.bins_map),
+        bins_bayes: usize::from(header.bins_bayes),
+        categories: usize::from(header.categories),
+        knots: [0; 4],
+        objectness: false,
+    };
+    if shape.floats().saturating_mul(4) > body.len() {
+        return Some(BodyPart::Length);
+    }
+    let mut sink = Locate {
+        k: shape.classes,
+        at: BodyPart::Header,
+    };
+    match parse_body_into(body, header.parts(), &mut sink) {
+        Err(DecodeError::Malformed) => Some(sink.at),
+        Err(_) => None,
+        Ok(parsed) if parsed.classes != shape.classes => Some(BodyPart::Class {
+            index: u16::try_from(parsed.classes).unwrap_or(u16::MAX),
+        }),
+        // Every part parsed: the bytes follow the format, but for the
+        // shortest-encoding rule, which only a decoded table can check.
+        Ok(_) => None,
+    }
 }
