@@ -1170,3 +1170,63 @@ fn max_encoded_len_bounds_a_worst_case_bayes_head() {
     run::<1, 3>();
     run::<200, 4>(); // two-byte Bayes bins
 }
+
+/// A malformed body is located: the part being read when the bytes stop following the
+/// format, for the C API's error details (`mlmap::locate_malformed`).
+#[test]
+fn malformed_bodies_are_located() {
+    use mlmap::{locate_malformed, BodyPart};
+    let at = |raw: RawTable| {
+        let bytes = raw.encode();
+        // Every case is one the decoder calls malformed.
+        #[cfg(feature = "std")]
+        assert_eq!(
+            mlmap::host::DynTable::from_bytes(&bytes).err(),
+            Some(DecodeError::Malformed)
+        );
+        locate_malformed(&bytes)
+    };
+    // Well-formed bytes, and bytes that fail an earlier check, have no such part.
+    assert_eq!(locate_malformed(SMALL_MLMAP), None);
+    assert_eq!(locate_malformed(&SMALL_MLMAP[..20]), None);
+    assert_eq!(locate_malformed(b"not a table at all"), None);
+    let with = |change: &dyn Fn(&mut RawTable)| {
+        let mut raw = RawTable::small();
+        change(&mut raw);
+        at(raw)
+    };
+    assert_eq!(with(&|r| r.trailing = vec![0]), Some(BodyPart::Trailing));
+    assert_eq!(
+        with(&|r| r.trailing = vec![1, 2, 3]),
+        Some(BodyPart::Trailing)
+    );
+    assert_eq!(with(&|r| r.edge_mode = 2), Some(BodyPart::Settings));
+    assert_eq!(with(&|r| r.upper_tail = 255), Some(BodyPart::Settings));
+    for c in 0..3 {
+        assert_eq!(
+            with(&|r| r.classes[c].name = vec![0xff, 0xfe]),
+            Some(BodyPart::Class { index: c as u16 }),
+            "class {c}"
+        );
+    }
+    // More classes announced in the body than in the header: a record too many.
+    assert_eq!(
+        with(&|r| r.class_count = 9),
+        Some(BodyPart::Class { index: 3 })
+    );
+    // A Bayes section with a row count more than its categories.
+    let mut raw = RawTable::small_bayes();
+    if let Some(b) = raw.bayes.as_mut() {
+        b.rows.push(5);
+    }
+    assert_eq!(at(raw), Some(BodyPart::Bayes));
+    // A class with one ML frequency more than the header's bins.
+    assert_eq!(
+        with(&|r| r.classes[1].ml_freqs.push(0.0)),
+        Some(BodyPart::Class { index: 1 })
+    );
+    // Bytes after a Bayes section.
+    let mut raw = RawTable::small_bayes();
+    raw.trailing = vec![7];
+    assert_eq!(at(raw), Some(BodyPart::Trailing));
+}

@@ -51,6 +51,8 @@ mlmap=target/release/mlmap
     --name mlmap_small_open_bytes >/dev/null
 "$mlmap" export-c --table tests/golden/layer/small_maps.mlmap --output "$work/table_small_maps.h" \
     --name mlmap_small_maps_bytes >/dev/null
+"$mlmap" export-c --table tables/default_q8.mlmap --output "$work/table_q8.h" \
+    --name mlmap_q8_bytes >/dev/null
 # The first 4096 rows of the test file, as the Rust bench parses them (the literals round
 # to the same floats as Rust's `str::parse::<f32>`).
 awk -F, 'NR == 1 { next } NR <= 4097 {

@@ -64,6 +64,10 @@ ROWS_Q8 = [
     ("q8_map", "default_q8", "int8 MAP"),
     ("q8_bayes", "default_q8", "int8 Bayes (FastMath)"),
     ("q8_open", "default_q8", "int8 open (FastMath)"),
+    ("q8_ml", "batch_q8", "int8 ML, C batch call"),
+    ("q8_map", "batch_q8", "int8 MAP, C batch call"),
+    ("q8_bayes", "batch_q8", "int8 Bayes, C batch call"),
+    ("q8_open", "batch_q8", "int8 open, C batch call"),
 ]
 
 RUST_FN = {
@@ -94,6 +98,15 @@ C_FN = {
     ("map", "batch"): "c_map_batch",
     ("bayes", "batch"): "c_bayes_batch",
     ("open", "batch"): "c_open_batch",
+    ("q8_noop", "default_q8"): "c_q8_noop",
+    ("q8_ml", "default_q8"): "c_q8_ml",
+    ("q8_map", "default_q8"): "c_q8_map",
+    ("q8_bayes", "default_q8"): "c_q8_bayes",
+    ("q8_open", "default_q8"): "c_q8_open",
+    ("q8_ml", "batch_q8"): "c_q8_ml_batch",
+    ("q8_map", "batch_q8"): "c_q8_map_batch",
+    ("q8_bayes", "batch_q8"): "c_q8_bayes_batch",
+    ("q8_open", "batch_q8"): "c_q8_open_batch",
 }
 
 
@@ -190,7 +203,8 @@ def main():
     goal_missed = []
     for key_head, table, label in ROWS_F32 + ROWS_BATCH + ROWS_Q8:
         key = (key_head, table)
-        rust_key = (key_head, "default") if table == "batch" else key
+        rust_key = {"batch": (key_head, "default"), "batch_q8": (key_head, "default_q8")}.get(
+            table, key)
         r = rust.get(rust_key)
         if r is None:
             failures.append(f"no Rust figure for {key}")
@@ -207,7 +221,7 @@ def main():
             if is_noop:
                 cells.append("")
             else:
-                nratio = net(c, key, ("noop", "default")) / net(rust, rust_key, noop_key)
+                nratio = net(c, key, noop_key) / net(rust, rust_key, noop_key)
                 cells.append(f"{nratio:.3f}")
                 if key_head != "sigmoid" and nratio > GOAL:
                     goal_missed.append(f"{label} {nratio:.3f}")
@@ -217,9 +231,8 @@ def main():
             if key_head not in ("noop", "sigmoid") and cc[2] != r[2]:
                 failures.append(f"{key}: C checksum {cc[2]} differs from Rust's {r[2]}")
         else:
-            if not quantized:
-                failures.append(f"no C figure for {key}")
-            cells += ["pending" if quantized else "", "", ""]
+            failures.append(f"no C figure for {key}")
+            cells += ["", "", ""]
         rc = reachable(RUST_FN[rust_key], rsize, rcalls)
         ccode = reachable(C_FN[key], csize, ccalls) if key in C_FN else None
         cells.append(f"{r[1]} / {cc[1]}" if cc is not None else f"{r[1]} / -")

@@ -525,22 +525,33 @@ fn store(slot: &mut f32, v: f32) {
 }
 
 /// A sink that stores nothing and remembers the part being read: where a malformed body
-/// stops following the format.
+/// stops following the format. It counts every sequence, and notes the first class
+/// whose histograms hold more frequencies than the header's bins (which a decoder, its
+/// storage of the header's shape, refuses as malformed).
 struct Locate {
-    k: usize,
+    shape: crate::lent::StorageShape,
     at: BodyPart,
+    over: Option<BodyPart>,
 }
 
 impl<'a> BodySink<'a> for Locate {
     fn capacity(&self) -> usize {
-        self.k
+        self.shape.classes
     }
 
     fn freqs(&mut self, _: usize, _: Head) -> &mut [f32] {
         &mut []
     }
 
-    fn class(&mut self, _: usize, _: ClassFields<'a>) {}
+    fn class(&mut self, class: usize, fields: ClassFields<'a>) {
+        if self.over.is_none()
+            && (fields.ml_len > self.shape.bins_ml || fields.map_len > self.shape.bins_map)
+        {
+            self.over = Some(BodyPart::Class {
+                index: u16::try_from(class).unwrap_or(u16::MAX),
+            });
+        }
+    }
 
     fn bayes(&mut self) -> BayesSlots<'_> {
         BayesSlots {
@@ -609,17 +620,38 @@ pub fn locate_malformed(bytes: &[u8]) -> Option<BodyPart> {
         return Some(BodyPart::Length);
     }
     let mut sink = Locate {
-        k: shape.classes,
+        shape,
         at: BodyPart::Header,
+        over: None,
     };
-    match parse_body_into(body, header.parts(), &mut sink) {
-        Err(DecodeError::Malformed) => Some(sink.at),
-        Err(_) => None,
-        Ok(parsed) if parsed.classes != shape.classes => Some(BodyPart::Class {
+    let parsed = match parse_body_into(body, header.parts(), &mut sink) {
+        Ok(p) => p,
+        Err(DecodeError::Malformed) => return Some(sink.at),
+        Err(_) => return None,
+    };
+    if parsed.classes != shape.classes {
+        return Some(BodyPart::Class {
             index: u16::try_from(parsed.classes).unwrap_or(u16::MAX),
-        }),
-        // Every part parsed: the bytes follow the format, but for the
-        // shortest-encoding rule, which only a decoded table can check.
-        Ok(_) => None,
+        });
     }
+    if let Some(part) = sink.over {
+        return Some(part);
+    }
+    // Sequences longer than the header's shape: more than a decoder's storage holds.
+    let cats = shape.categories;
+    let terms = shape
+        .classes
+        .saturating_mul(shape.bins_bayes)
+        .saturating_mul(cats);
+    if let Some((_, [rows, axes, t])) = parsed.bayes {
+        if rows > cats || axes > shape.classes || t > terms {
+            return Some(BodyPart::Bayes);
+        }
+    }
+    if parsed.objectness > Some(shape.bins_bayes.saturating_mul(cats)) {
+        return Some(BodyPart::Objectness);
+    }
+    // Every part parsed: the bytes follow the format, but for the shortest-encoding
+    // rule, which only a decoded table can check.
+    None
 }
