@@ -39,6 +39,14 @@ RATIO_BOUNDS = {
     ("open", "default"): 1.45,
     ("open", "small_open"): 1.45,
     ("open", "small_maps"): 1.28,
+    ("q8_ml", "default_q8"): 1.90,
+    ("q8_map", "default_q8"): 2.00,
+    ("q8_bayes", "default_q8"): 1.40,
+    ("q8_open", "default_q8"): 1.23,
+    ("q8_ml", "batch_q8"): 1.40,
+    ("q8_map", "batch_q8"): 1.45,
+    ("q8_bayes", "batch_q8"): 1.16,
+    ("q8_open", "batch_q8"): 1.08,
 }
 
 # The rows of the table: (head, table, label).

@@ -15,7 +15,7 @@ use mlmap::{Code, Head, QField, QTableError};
 use super::arena::Failure;
 use super::decode::describes_memory;
 use super::detail::{mlmap_error_t, mlmap_field_t, report};
-use super::limits::MAX_CLASSES;
+use super::limits::{FAST_CLASSES, MAX_CLASSES};
 use super::mlmap_status_t::{self, *};
 use super::{check_ptr, overlap, put, status};
 
@@ -485,18 +485,51 @@ unsafe fn detection<Q: Code + Default>(
         return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
     }
     outside(c, out as usize, k * size_of::<f32>())?;
-    // The codes are copied first, so the scores may overlap them in any way.
-    let mut x = [Q::default(); MAX_CLASSES];
-    let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
-    let mut scratch = [0.0f32; 2 * MAX_CLASSES + 1];
-    // SAFETY: `k` readable codes at `codes` and `k <= out_len` writable floats at `out`
-    // (the caller's promise), non-NULL and aligned (checked); the codes are read whole
-    // before `out` is made, and `out` overlaps neither the arena nor the bytes.
-    unsafe {
-        ptr::copy_nonoverlapping(codes, x.as_mut_ptr(), k);
-        let out = core::slice::from_raw_parts_mut(out, k);
-        Ok(c.q.score_into(head, x, objectness, out, &mut scratch)?)
+    // The class counts of FAST_CLASSES (MLMAP_FAST_CLASSES) copy their codes and clear
+    // their scratch at their own size.
+    macro_rules! dispatch {
+        ($($k:literal)*) => {
+            match k {
+                $($k if FAST_CLASSES.contains(&$k) => {
+                    // SAFETY: forwarded contract, `k` codes and floats.
+                    unsafe { one::<Q, $k, { 2 * $k + 1 }>(c, head, codes, k, objectness, out) }
+                })*
+                // SAFETY: as above.
+                _ => unsafe {
+                    one::<Q, MAX_CLASSES, { 2 * MAX_CLASSES + 1 }>(c, head, codes, k, objectness, out)
+                },
+            }
+        };
     }
+    dispatch!(2 3 4 5 6 7 8 9 10 11 12 13 14 15 16)
+}
+
+/// One detection of `k <= N` codes with a scratch of `S >= 2 k + 1` floats.
+///
+/// # Safety
+///
+/// `k` readable codes at `codes` and `k` writable floats at `out`, non-NULL and aligned,
+/// `out` overlapping neither the arena nor the section's bytes.
+#[inline(always)]
+unsafe fn one<Q: Code + Default, const N: usize, const S: usize>(
+    c: &Control,
+    head: Head,
+    codes: *const Q,
+    k: usize,
+    objectness: f32,
+    out: *mut f32,
+) -> Result<(), mlmap_status_t> {
+    // The codes are copied first, so the scores may overlap them in any way.
+    let mut x = [Q::default(); N];
+    let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
+    for (i, d) in x.iter_mut().enumerate() {
+        // SAFETY: `i < k` (the caller's promise).
+        *d = unsafe { codes.add(i).read() };
+    }
+    let mut scratch = [0.0f32; S];
+    // SAFETY: the codes are read whole; `out` is the caller's (see above).
+    let out = unsafe { core::slice::from_raw_parts_mut(out, k) };
+    Ok(c.q.score_into(head, x, objectness, out, &mut scratch)?)
 }
 
 /// Scores a batch: the checks, then one row at a time.

@@ -4,6 +4,10 @@
 //! quantization scores, for any codes, exactly as the `f32` table on the dequantized
 //! logits (DESIGN §6.19).
 //!
+//! The C API's quantized calls agree with `DynQTable`: the init succeeds exactly when it
+//! reads the section and K fits the library's maximum, and every head scores the same bits
+//! or fails with the matching status.
+//!
 //! The first byte picks the mode: even, the rest is a section (tried as given, and with
 //! its trailer's length and CRC made valid, so that mutations get past the checksum);
 //! odd, the rest gives the quantization (code width, scales, zero points) and codes.
@@ -63,6 +67,7 @@ fn crc32(bytes: &[u8]) -> u32 {
 const CODES: [i16; 9] = [i16::MIN, -200, -128, -1, 0, 1, 127, 300, i16::MAX];
 
 fn read_all(bytes: &[u8]) {
+    c_api(bytes);
     let dynq = DynQTable::from_bytes(bytes);
     if let Err(e) = &dynq {
         assert!(!e.to_string().is_empty());
@@ -138,6 +143,83 @@ fn read_all(bytes: &[u8]) {
                         "{e:?}"
                     ),
                 }
+            }
+        }
+    }
+}
+
+#[repr(C, align(8))]
+struct Arena([u8; 4096]);
+
+/// The C API on `bytes`: init, then every head on the codes of [`CODES`], against
+/// `DynQTable`.
+fn c_api(bytes: &[u8]) {
+    use mlmap_ffi::mlmap_status_t::*;
+    use mlmap_ffi::*;
+    let dynq = DynQTable::from_bytes(bytes);
+    let mut arena = Box::new(Arena([0xa5; 4096]));
+    let mut size = 0usize;
+    let mut detail = mlmap_error_t {
+        status: MLMAP_OK,
+        field: mlmap_field_t::MLMAP_FIELD_NONE,
+        head: -1,
+        class_index: -1,
+        needed: 0,
+    };
+    // SAFETY: the bytes and a `size_t`.
+    let s = unsafe { mlmap_qtable_arena_size(bytes.as_ptr(), bytes.len(), &mut size, &mut detail) };
+    assert!(ALL_STATUSES.contains(&s) && detail.status == s, "{s:?}");
+    let mut q: *mut mlmap_qtable_t = std::ptr::null_mut();
+    // SAFETY: 4096 bytes of 8-aligned storage, the bytes, outputs.
+    let s = unsafe {
+        mlmap_qtable_init(
+            arena.0.as_mut_ptr().cast(),
+            arena.0.len(),
+            bytes.as_ptr(),
+            bytes.len(),
+            &mut q,
+            &mut detail,
+        )
+    };
+    assert!(ALL_STATUSES.contains(&s) && detail.status == s, "{s:?}");
+    let fits = dynq.as_ref().is_ok_and(|d| d.k() <= 16);
+    assert_eq!(s == MLMAP_OK, fits, "{s:?} vs {:?}", dynq.as_ref().err());
+    let Ok(d) = dynq else {
+        assert!(q.is_null());
+        return;
+    };
+    if !fits {
+        return;
+    }
+    assert_eq!(size, 96 + 24 * 8 + d.k() * (16 + 11 * 8));
+    let k = d.k();
+    let (lo, hi) = mlmap::code_range(d.bits());
+    for (n, &a) in CODES.iter().enumerate() {
+        let mut codes: Vec<i32> = (0..k)
+            .map(|c| i32::from(CODES[(n + c * 4) % CODES.len()]).clamp(lo, hi))
+            .collect();
+        codes[0] = i32::from(a).clamp(lo, hi);
+        for (head, h) in [Head::Ml, Head::Map, Head::Bayes, Head::Open].into_iter().zip(0..) {
+            let mut want = vec![0.0f32; k];
+            let r = d.score_into(head, &codes, 0.7, &mut want);
+            let mut out = vec![0.0f32; k];
+            // SAFETY: K codes of the section's width, K floats.
+            let s = unsafe {
+                if d.bits() == 8 {
+                    let c: Vec<i8> = codes.iter().map(|&v| v as i8).collect();
+                    mlmap_qscore_i8(q, h, c.as_ptr(), k, 0.7, out.as_mut_ptr(), k)
+                } else {
+                    let c: Vec<i16> = codes.iter().map(|&v| v as i16).collect();
+                    mlmap_qscore_i16(q, h, c.as_ptr(), k, 0.7, out.as_mut_ptr(), k)
+                }
+            };
+            match r {
+                Ok(()) => {
+                    assert_eq!(s, MLMAP_OK);
+                    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(&out), bits(&want), "{head:?} {codes:?}");
+                }
+                Err(e) => assert_eq!(s, mlmap_status_t::from(e), "{head:?}"),
             }
         }
     }
