@@ -169,7 +169,7 @@ const fn score_error_bound(lo_a: f64, hi_a: f64, lo_b: f64, hi_b: f64, k: usize)
 /// (1 - s) alpha) <= (beta - alpha) / (4 alpha)`, since `s (1 - s) <= 1/4`. With
 /// `alpha ~ 1 - e` and `beta ~ 1 + e` that is about `e / 2`.
 ///
-/// The normalisation (`src/layer.rs`: `b_j = a_j * fl(1 / max)`, `R_i` summed from
+/// The normalisation (`core/src/heads/layer.rs`: `b_j = a_j * fl(1 / max)`, `R_i` summed from
 /// `K - 1` terms, then `OS / (1 + R_i / b_i)`) rounds `K + 3` times along the way from the
 /// masses to one score (two for the scaled masses, `K - 2` in the sum, one each for the
 /// quotient, the `1 +` and the final division), so each backend's score is within a
