@@ -1,4 +1,5 @@
-//! The Bayes head (DESIGN §1.6).
+//! The Bayes head (DESIGN §1.6): arbitrary heads (`ArbBayes`), its objectness feature,
+//! and its scores against the formula.
 
 use super::*;
 

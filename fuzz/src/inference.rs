@@ -1,4 +1,5 @@
-//! Inference invariants (DESIGN §1.3, invariants 1, 2 and 4).
+//! Inference invariants (DESIGN §1.3, invariants 1, 2 and 4): logits from fuzz input, the
+//! scores of the ML and MAP heads against the formula, one detection and in batches.
 
 use super::*;
 

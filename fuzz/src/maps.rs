@@ -1,4 +1,5 @@
-//! Recalibration maps (DESIGN §1.9).
+//! Recalibration maps (DESIGN §1.9): arbitrary knots (`ArbMaps`) on every head, and the
+//! mapped scores checked against the head's own (same error, order and decision).
 
 use super::*;
 

@@ -1,4 +1,5 @@
-//! The open head (DESIGN §1.8).
+//! The open head (DESIGN §1.8): arbitrary temperatures and epsilons (`ArbOpen`), its
+//! scores against the formula, and that a larger epsilon never raises a score.
 
 use super::*;
 

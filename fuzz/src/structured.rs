@@ -1,4 +1,5 @@
-//! Structured tables.
+//! Structured tables: reals, frequencies, names, classes and settings from fuzz input,
+//! and whole tables (`ArbTable`) of a given shape built from them.
 
 use super::*;
 

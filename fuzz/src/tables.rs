@@ -1,4 +1,5 @@
-//! Table invariants (DESIGN §1.3, invariant 5).
+//! Table invariants (DESIGN §1.3, invariant 5): every histogram, prior and table a target
+//! meets, and the encoding of a valid table.
 
 use super::*;
 
