@@ -75,7 +75,7 @@ pub struct GroupResult {
     pub energy: Ranking,
 }
 
-/// Everything [`evaluate`] computes.
+/// Everything [`evaluate`](super::evaluate) computes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Evaluation {
     /// The table's class names.

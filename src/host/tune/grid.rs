@@ -6,7 +6,7 @@ use std::prelude::rust_2021::*;
 
 /// The most candidates (bin count and lambda pairs, over every head) one search
 /// builds: about eight times the default grid (DESIGN §4). A larger grid is refused
-/// before anything is read ([`TuneParams::check_size`]).
+/// before anything is read ([`TuneParams::check_size`](super::TuneParams::check_size)).
 pub const MAX_CANDIDATES: usize = 20_000;
 
 /// Parses a bin-count set: `N`, `A..B` (inclusive) or `A,B,C`; every count >= 1.

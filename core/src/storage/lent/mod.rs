@@ -165,7 +165,7 @@ impl<'t, 'a> LentTable<'t, '_, 'a> {
     ///
     /// As [`Table::from_bytes`](crate::Table::from_bytes); a shape mismatch means
     /// storage of another shape than the table's; [`DecodeError::MapCapacity`] a map
-    /// longer than its slice in `knots` (and at most [`MAX_KNOTS`]),
+    /// longer than its slice in `knots` (and at most [`MAX_KNOTS`](crate::MAX_KNOTS)),
     /// [`DecodeError::ObjectnessMismatch`] an objectness feature without room for it.
     pub fn decode(
         self,
