@@ -2,8 +2,8 @@
 """Lists the Rust source files longer than the limit on lines of code.
 
 A line of code is a line that is neither blank nor a comment (`//`, `///`, `//!`, or
-inside `/* ... */`), counted up to a file's unit-test module (`#[cfg(test)]` followed by
-`mod tests {`). Test code is not counted: that module, a unit-test module in a file of
+inside `/* ... */`), counted up to a file's unit-test module (`#[cfg(test)]`, or `#[cfg(all(test, ...))]`,
+followed by `mod tests {`). Test code is not counted: that module, a unit-test module in a file of
 its own (`tests.rs`) and the integration tests (every file under a `tests/` directory),
 unless `--tests` is given. Generated data files (`ALLOW`) may exceed the limit.
 
@@ -47,7 +47,7 @@ def code_lines(text: str) -> int:
             if "*/" not in line[2:]:
                 in_block = True
             continue
-        if line == "#[cfg(test)]":
+        if re.fullmatch(r"#\[cfg\((all\()?test\b.*\]", line):
             rest = [l.strip() for l in lines[i + 1:i + 3]]
             if any(re.match(r"(pub(\([\w:]+\))? )?mod tests\s*\{", l) for l in rest):
                 break
