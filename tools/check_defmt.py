@@ -25,16 +25,25 @@ def exported_names(lib: str) -> set:
     return names
 
 
+def public_modules(lib: str) -> list:
+    """`x` for every `pub mod x;` and every `pub use group::x;` (a module re-export:
+    a lowercase name) at the crate root."""
+    declared = re.findall(r"^pub mod (\w+);", lib, flags=re.M)
+    reexported = re.findall(r"^pub use (?:\w+::)+([a-z_][a-z0-9_]*);", lib, flags=re.M)
+    return declared + reexported
+
+
 def main() -> int:
     files = {p: p.read_text() for p in SRC.rglob("*.rs")}
     text = "\n".join(files.values())
     types = set(re.findall(r"^pub (?:struct|enum) (\w+)", text, flags=re.M))
     exported = exported_names(files[SRC / "lib.rs"]) & types
-    # The public modules (`pub mod x;`): every public type in them is public too.
-    for module in re.findall(r"^pub mod (\w+);", files[SRC / "lib.rs"], flags=re.M):
+    # The public modules, declared at the root (`pub mod x;`) or re-exported from a
+    # group directory (`pub use group::x;`): every public type in them is public too.
+    for module in public_modules(files[SRC / "lib.rs"]):
         for path, body in files.items():
-            rel = path.relative_to(SRC)
-            if rel == pathlib.Path(f"{module}.rs") or rel.parts[0] == module:
+            rel = path.relative_to(SRC).with_suffix("")
+            if module in rel.parts:
                 exported |= set(re.findall(r"^pub (?:struct|enum) (\w+)", body, flags=re.M))
     formatted = set(re.findall(r"Format for (?:crate::)?(\w+)", text))
     derived = set(

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Coefficients of the polynomial in `FastMath`'s `exp` (src/fastmath.rs).
+"""Coefficients of the polynomial in `FastMath`'s `exp` (core/src/math/fastmath.rs).
 
 The minimax polynomial of degree N (default 5) for `e^r` on `|r| <= ln(2)/2`, widened by
 1e-4 relative for the rounding of the reduction, in *relative* error, found with the
