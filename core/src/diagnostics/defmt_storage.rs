@@ -5,7 +5,9 @@
 use defmt::{write, Format, Formatter};
 
 use crate::lidar::{Calibration, LidarError, Pixel, Projected, Projection, R0};
-use crate::storage::lent::{ArenaLayout, LentBayes, LentTable, StorageShape};
+use crate::storage::lent::{
+    ArenaLayout, LentBayes, LentQTable, LentTable, QClass, QLogit, StorageShape,
+};
 
 impl Format for StorageShape {
     fn format(&self, f: Formatter<'_>) {
@@ -121,7 +123,7 @@ impl Format for R0 {
     }
 }
 
-impl Format for crate::lent::LentQTable<'_, '_> {
+impl Format for LentQTable<'_, '_> {
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
@@ -133,7 +135,7 @@ impl Format for crate::lent::LentQTable<'_, '_> {
     }
 }
 
-impl Format for crate::lent::QClass<'_> {
+impl Format for QClass<'_> {
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
@@ -143,7 +145,7 @@ impl Format for crate::lent::QClass<'_> {
     }
 }
 
-impl Format for crate::lent::QLogit<'_> {
+impl Format for QLogit<'_> {
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
