@@ -54,9 +54,9 @@ if ! diff -u include/mlmap.h "$work/mlmap.h"; then
 fi
 echo "ok: include/mlmap.h is up to date"
 
-section "x86-64 static library (cargo rustc --release --crate-type staticlib: LTO)"
-(cd ffi && cargo rustc --release --crate-type staticlib --quiet)
-lib=ffi/target/release/libmlmap_ffi.a
+section "x86-64 static library (cargo rustc --profile release-abort --crate-type staticlib: LTO)"
+cargo rustc -p mlmap-ffi --profile release-abort --crate-type staticlib --quiet
+lib=target/release-abort/libmlmap_ffi.a
 ls -l "$lib"
 for tool in cc readelf; do
     command -v "$tool" >/dev/null || fail "\`$tool\` not found"
@@ -74,9 +74,10 @@ echo "ok: $(wc -l <<<"$undefined") undefined symbols, none an allocator"
 section "no panic path: the host test links; a canary library must not"
 cc "${CFLAGS[@]}" ffi/tests/host.c -Wl,--gc-sections "$lib" -lm -o "$work/host"
 echo "ok: ffi/tests/host.c (every entry point) links without mlmap_panic_path_reachable"
-(cd ffi && cargo rustc --release --crate-type staticlib --features canary --quiet \
-    --target-dir target/canary)
-if cc "${CFLAGS[@]}" ffi/tests/host.c -Wl,--gc-sections ffi/target/canary/release/libmlmap_ffi.a \
+# Its own target directory: the library of the step above stays in place.
+cargo rustc -p mlmap-ffi --profile release-abort --crate-type staticlib --features canary \
+    --quiet --target-dir target/ffi-canary
+if cc "${CFLAGS[@]}" ffi/tests/host.c -Wl,--gc-sections target/ffi-canary/release-abort/libmlmap_ffi.a \
     -lm -o "$work/canary" 2>"$work/canary.log"; then
     fail "the canary library linked: a reachable panic would not fail the link"
 fi
@@ -84,8 +85,8 @@ grep -q mlmap_panic_path_reachable "$work/canary.log" ||
     { cat "$work/canary.log" >&2; fail "the canary link failed, but not on the panic symbol"; }
 echo "ok: the canary build fails to link on mlmap_panic_path_reachable"
 
-section "Rust test of the C entry points (cargo test --release --features std)"
-(cd ffi && cargo test --release --features std --quiet)
+section "Rust test of the C entry points (cargo test --profile release-abort --features std)"
+cargo test -p mlmap-ffi --profile release-abort --features std --quiet
 
 section "host C test against \`mlmap apply\`"
 cargo build --release --features cli --bin mlmap --quiet
@@ -142,9 +143,11 @@ export ASAN_OPTIONS=abort_on_error=0:detect_leaks=1 UBSAN_OPTIONS=print_stacktra
 source .ci/nightly.sh
 nightly_acquire || fail "no pinned nightly toolchain: the library cannot be built with -Zsanitizer=address"
 host_triple=$(rustc -vV | awk '/^host:/ { print $2 }')
-(cd ffi && RUSTFLAGS="-Zsanitizer=address" cargo +"$NIGHTLY" rustc --release \
-    --crate-type staticlib --target "$host_triple" --target-dir target/asan --quiet)
-asan_lib="ffi/target/asan/$host_triple/release/libmlmap_ffi.a"
+# `--target`: the sanitizer flags reach the library, not the build scripts, and the
+# library lands in target/$host_triple/, apart from the release one.
+RUSTFLAGS="-Zsanitizer=address" cargo +"$NIGHTLY" rustc -p mlmap-ffi --profile release-abort \
+    --crate-type staticlib --target "$host_triple" --quiet
+asan_lib="target/$host_triple/release-abort/libmlmap_ffi.a"
 for which in release asan; do
     if [[ $which == release ]]; then l=$lib; else l=$asan_lib; fi
     cc "${SAN[@]}" ffi/tests/host.c -Wl,--gc-sections "$l" -lm -o "$work/host-san-$which"
@@ -197,8 +200,8 @@ if ! command -v arm-none-eabi-gcc >/dev/null || ! command -v qemu-system-arm >/d
         "Rust target $THUMB_TARGET: $THUMB_VIA"
 fi
 arm-none-eabi-gcc --version | head -n 1
-(cd ffi && thumb_cargo rustc --profile release-size --crate-type staticlib --quiet)
-thumb_lib="ffi/$(cd ffi && thumb_out_dir release-size)/libmlmap_ffi.a"
+thumb_cargo rustc -p mlmap-ffi --profile release-size --crate-type staticlib --quiet
+thumb_lib="$(thumb_out_dir release-size)/libmlmap_ffi.a"
 ls -l "$thumb_lib"
 
 fw=ffi/firmware

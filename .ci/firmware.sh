@@ -48,8 +48,9 @@ echo "toolchain: $THUMB_VIA"
 
 # The firmware compares the build-time table with the default file.
 unset MLMAP_TABLE
+# From its directory: its .cargo/config.toml selects the target and the linker script.
 cd firmware
-elf="$(thumb_out_dir release)/mlmap-firmware"
+elf="$(thumb_out_dir firmware)/mlmap-firmware"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
@@ -59,7 +60,7 @@ run_qemu() { # $1 = ELF; prints the firmware's output, returns QEMU's exit statu
 }
 
 section "canary: perturbed expected values must fail the run"
-thumb_cargo build --release --features canary
+thumb_cargo build --profile firmware --features canary
 cp "$elf" "$work/canary.elf"
 status=0
 run_qemu "$work/canary.elf" >"$work/canary.log" 2>&1 || status=$?
@@ -80,8 +81,8 @@ grep -qE '^FAIL .*: .* set: got mask' "$work/canary.log" ||
     fail "the canary firmware did not fail on its flipped conformal set"
 echo "ok: the canary firmware failed as it must (exit status $status)"
 
-section "build: cargo build --release --target $THUMB_TARGET (via $THUMB_VIA)"
-thumb_cargo build --release
+section "build: cargo build --profile firmware --target $THUMB_TARGET (via $THUMB_VIA)"
+thumb_cargo build --profile firmware
 size -A "$elf" | grep -E '^\.(vector_table|text|rodata|calib|data|bss) ' || true
 
 section "run on qemu-system-arm -cpu cortex-m4 -machine mps2-an386"

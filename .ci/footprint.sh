@@ -66,14 +66,23 @@ fi
 echo "tools: $SIZE, $READOBJ"
 
 unset MLMAP_TABLE
+# From its directory: its .cargo/config.toml selects the target and the linker script.
 cd footprint
-build() { # $1 = variant (full, decode-only, baseline), rest = extra cargo arguments
+elfs=$(mktemp -d)
+frames=$(mktemp)
+calls=$(mktemp)
+trap 'rm -rf "$elfs" "$frames" "$calls" "$calls.names"' EXIT
+# Every variant builds into the workspace's target directory (the library's artifacts
+# are shared) and is copied out, as the next build replaces the image; the stack build,
+# with other compiler flags, has a target directory of its own.
+build() { # $1 = variant (full, decode-only, baseline, ...), rest = extra cargo arguments
     local variant=$1
     shift
     local features=()
     [[ "$variant" == full || "$variant" == stack ]] || features=(--features "$variant")
-    CARGO_TARGET_DIR="target/$variant" thumb_cargo build --release --quiet "${features[@]}" "$@"
-    echo "$(CARGO_TARGET_DIR="target/$variant" thumb_out_dir release)/mlmap-footprint"
+    thumb_cargo build --profile release-size --quiet "${features[@]}" "$@"
+    cp "$(thumb_out_dir release-size)/mlmap-footprint" "$elfs/$variant"
+    echo "$elfs/$variant"
 }
 section_size() { # $1 = ELF, $2 = section
     "$SIZE" -A "$1" | awk -v s="$2" '$1 == s { print $2; found = 1 } END { if (!found) print 0 }'
@@ -83,10 +92,10 @@ section "builds: opt-level \"s\", LTO, codegen-units 1, panic abort"
 full=$(build full)
 decode=$(build decode-only)
 base=$(build baseline)
-stack=$(RUSTC_BOOTSTRAP=1 build stack \
+stack=$(RUSTC_BOOTSTRAP=1 CARGO_TARGET_DIR="$THUMB_TARGET_DIR/footprint-stack" build stack \
     --config "target.$THUMB_TARGET.rustflags = [\"-Zemit-stack-sizes\"]")
 for elf in "$full" "$decode" "$base"; do
-    echo "$elf"
+    echo "${elf##*/}:"
     "$SIZE" -A "$elf" | grep -E '^\.(vector_table|text|rodata|data|bss) '
 done
 
@@ -141,9 +150,6 @@ printf 'tables/default.mlmap (K = 3; 22 ML, 17 MAP, 22 Bayes bins; 4 categories)
     "$bytes" "$(verdict "$bytes" 800)"
 
 section "stack (frames from -Z emit-stack-sizes)"
-frames=$(mktemp)
-calls=$(mktemp)
-trap 'rm -f "$frames" "$calls" "$calls.names"' EXIT
 # "<frame bytes> <mangled name>" for every function; mangled names are mapped to
 # demangled ones through llvm-nm's two listings of the same symbols.
 "$READOBJ" --stack-sizes "$stack" | awk '

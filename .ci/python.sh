@@ -25,14 +25,14 @@ if ! python3 -m venv "$build_venv" 2>/dev/null; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
     python3 -m venv "$build_venv"
 fi
-echo "cargo fmt --check and clippy of python/ (its own workspace)"
-cargo fmt --manifest-path python/Cargo.toml --check
-cargo clippy --manifest-path python/Cargo.toml --quiet -- -D warnings
+echo "cargo fmt --check and clippy of python/ (the workspace member mlmap-python)"
+cargo fmt -p mlmap-python --check
+cargo clippy -p mlmap-python --quiet -- -D warnings
 
-echo "maturin build --release (the abi3 wheel)"
+echo "maturin build --profile python (the abi3 wheel)"
 "$build_venv/bin/python" -m pip install -q "maturin>=1.9,<2"
 rm -rf "$wheels"
-"$build_venv/bin/python" -m maturin build --release --quiet -m python/Cargo.toml -o "$wheels"
+"$build_venv/bin/python" -m maturin build --profile python --quiet -m python/Cargo.toml -o "$wheels"
 wheel=$(ls "$wheels"/mlmap-*.whl)
 [[ $(wc -w <<<"$wheel") -eq 1 ]] || fail "expected one wheel in $wheels, found: $wheel"
 [[ $wheel == *-abi3-* ]] || fail "$wheel is not an abi3 wheel"

@@ -12,6 +12,10 @@
 
 THUMB_TARGET=thumbv7em-none-eabihf
 THUMB_VIA=none
+# The workspace's target directory, where every member builds (absolute, so that it
+# holds from a crate's directory too).
+THUMB_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+THUMB_TARGET_DIR=${CARGO_TARGET_DIR:-$THUMB_ROOT/target}
 DEBIAN_RUST_PACKAGES=(rustc-web cargo-web rust-web-src lld-14)
 
 thumb_debian_ready() {
@@ -62,7 +66,7 @@ thumb_cargo() {
         ;;
     debian)
         # Own target directory: artifacts of another compiler, and a `core` built here.
-        CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-target}/debian" \
+        CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$THUMB_TARGET_DIR}/debian" \
             RUSTC_BOOTSTRAP=1 RUSTC=/usr/bin/rustc RUSTDOC=/usr/bin/rustdoc \
             /usr/bin/cargo "$@" --target "$THUMB_TARGET" \
             -Zbuild-std=core -Zbuild-std-features=compiler-builtins-mem \
@@ -75,11 +79,12 @@ thumb_cargo() {
     esac
 }
 
-# The output directory of a `thumb_cargo build` (relative to the crate's directory).
-thumb_out_dir() { # $1 = profile directory (release, debug)
+# The output directory of a `thumb_cargo build` (an absolute path unless CARGO_TARGET_DIR
+# is a relative one).
+thumb_out_dir() { # $1 = profile directory (firmware, release-size, debug)
     case "$THUMB_VIA" in
-    debian) echo "${CARGO_TARGET_DIR:-target}/debian/$THUMB_TARGET/$1" ;;
-    *) echo "${CARGO_TARGET_DIR:-target}/$THUMB_TARGET/$1" ;;
+    debian) echo "${CARGO_TARGET_DIR:-$THUMB_TARGET_DIR}/debian/$THUMB_TARGET/$1" ;;
+    *) echo "${CARGO_TARGET_DIR:-$THUMB_TARGET_DIR}/$THUMB_TARGET/$1" ;;
     esac
 }
 

@@ -83,10 +83,10 @@
  * `MLMAP_MAX_BINS` bins in the ML and MAP heads and `MLMAP_MAX_BINS_BAYES` bins per
  * logit in the Bayes head (0: no Bayes head). Change them by building the library with
  * the environment variables of the same names, e.g.
- * `MLMAP_MAX_CLASSES=8 MLMAP_MAX_BINS=32 cargo build --release`, and by defining the
- * same macros before including this header. The table storage is sized from them;
- * mlmap_limits() tells what the library was built with, and mlmap_table_decode()
- * refuses storage smaller than the library needs.
+ * `MLMAP_MAX_CLASSES=8 MLMAP_MAX_BINS=32 cargo build -p mlmap-ffi --profile release-abort`,
+ * and by defining the same macros before including this header. The table storage is
+ * sized from them; mlmap_limits() tells what the library was built with, and
+ * mlmap_table_decode() refuses storage smaller than the library needs.
  * @{
  */
 #ifndef MLMAP_MAX_CLASSES

@@ -51,7 +51,6 @@
 //! * `cli`: the `mlmap` companion binary.
 #![no_std]
 #![forbid(unsafe_code)]
-#![deny(missing_docs)]
 #![cfg_attr(docsrs, feature(doc_cfg))]
 // `!(a < b)` is deliberate throughout: it is true for NaN, which must be rejected.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -15,13 +15,13 @@ cd "$(dirname "$0")/.."
 n="${N:-16384}"
 out="$(mktemp -d)"
 trap 'rm -rf "$out"' EXIT
-(cd ffi && cargo rustc --quiet --release --crate-type staticlib)
+cargo rustc -p mlmap-ffi --quiet --profile release-abort --crate-type staticlib
 cc -std=c11 -O2 -Iinclude ffi/tests/instr_count.c -Wl,--gc-sections \
-    ffi/target/release/libmlmap_ffi.a -lm -o "$out/c_count"
+    target/release-abort/libmlmap_ffi.a -lm -o "$out/c_count"
 cargo build --quiet --release --features micromath,std --example instr_count
 rust="target/release/examples/instr_count"
-(cd ffi && cargo build --quiet --release --features std --example bounded_count)
-bounded="ffi/target/release/examples/bounded_count"
+cargo build -p mlmap-ffi --quiet --profile release-abort --features std --example bounded_count
+bounded="target/release-abort/examples/bounded_count"
 
 count() { # command...
     valgrind --tool=callgrind --callgrind-out-file="$out/cg" "$@" >/dev/null 2>&1

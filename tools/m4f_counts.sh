@@ -5,7 +5,7 @@
 # instructions per tick, read before and after a batch of 4096 detections), with the
 # stack per call and the code per head. Builds and runs:
 #   * firmware/src/bin/bench.rs (feature `bench`): the Rust API (`Table`, `QTable`) at
-#     the firmware's profile (opt-level "s", fat LTO);
+#     the firmware's profile (`firmware`: opt-level "s", fat LTO);
 #   * ffi/firmware/bench.c: the C API, arm-none-eabi-gcc -Os against the thumbv7em static
 #     library at its Cortex-M4F profile (`release-size`: opt-level "s", fat LTO);
 # each twice (the counts must repeat exactly), then prints the table of
@@ -40,10 +40,10 @@ fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 echo "== builds"
-(cd firmware && thumb_cargo build --release --quiet --features bench --bin bench)
-rust_elf="firmware/$(cd firmware && thumb_out_dir release)/bench"
-(cd ffi && thumb_cargo rustc --profile release-size --crate-type staticlib --quiet)
-thumb_lib="ffi/$(cd ffi && thumb_out_dir release-size)/libmlmap_ffi.a"
+(cd firmware && thumb_cargo build --profile firmware --quiet --features bench --bin bench)
+rust_elf="$(thumb_out_dir firmware)/bench"
+thumb_cargo rustc -p mlmap-ffi --profile release-size --crate-type staticlib --quiet
+thumb_lib="$(thumb_out_dir release-size)/libmlmap_ffi.a"
 cargo build --release --quiet --features cli --bin mlmap
 mlmap=target/release/mlmap
 "$mlmap" export-c --table tables/default.mlmap --output "$work/table.h" >/dev/null

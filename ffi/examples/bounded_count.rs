@@ -3,7 +3,7 @@
 //! against the C API: `tools/callgrind_ffi.sh` runs it for N and 2N detections.
 //!
 //! ```text
-//! cargo run --release --features std --example bounded_count -- map 16384
+//! cargo run -p mlmap-ffi --profile release-abort --features std --example bounded_count -- map 16384
 //! ```
 //!
 //! Each head uses the backend the C API uses: `Libm` for MAP, and for the Bayes and open

@@ -17,8 +17,6 @@
 //! (`MLMAP_ERR_OVERLAP` otherwise). Every other call reads its inputs whole before it
 //! writes its one output.
 #![cfg_attr(not(feature = "std"), no_std)]
-#![deny(missing_docs)]
-#![deny(unsafe_op_in_unsafe_fn)]
 #![allow(non_camel_case_types)]
 // The doc comments are the header's Doxygen comments: `@param[out]` is not a Rust link.
 #![allow(rustdoc::broken_intra_doc_links)]

@@ -12,10 +12,22 @@ pub enum Logit {
     Grid(i16),
     /// An edge of this class's ML (`map = false`) or MAP histogram, moved by `ulps`
     /// representable steps: bin boundaries, where rounding decides.
-    Edge { map: bool, k: u16, ulps: i8 },
+    Edge {
+        /// The MAP histogram (else the ML one).
+        map: bool,
+        /// The edge, modulo the histogram's edge count.
+        k: u16,
+        /// Representable steps from the edge.
+        ulps: i8,
+    },
     /// An edge of this logit's Bayes axis (when the table has that head; else 0), moved
     /// by `ulps` steps.
-    BayesEdge { k: u16, ulps: i8 },
+    BayesEdge {
+        /// The edge, modulo the axis's edge count.
+        k: u16,
+        /// Representable steps from the edge.
+        ulps: i8,
+    },
 }
 
 /// An objectness score from fuzz input.
