@@ -199,7 +199,10 @@ fn c_api(bytes: &[u8]) {
             .map(|c| i32::from(CODES[(n + c * 4) % CODES.len()]).clamp(lo, hi))
             .collect();
         codes[0] = i32::from(a).clamp(lo, hi);
-        for (head, h) in [Head::Ml, Head::Map, Head::Bayes, Head::Open].into_iter().zip(0..) {
+        for (head, h) in [Head::Ml, Head::Map, Head::Bayes, Head::Open]
+            .into_iter()
+            .zip(0..)
+        {
             let mut want = vec![0.0f32; k];
             let r = d.score_into(head, &codes, 0.7, &mut want);
             let mut out = vec![0.0f32; k];
