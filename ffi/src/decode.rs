@@ -246,29 +246,47 @@ pub unsafe extern "C" fn mlmap_table_arena_size(
     size: *mut usize,
     detail: *mut mlmap_error_t,
 ) -> mlmap_status_t {
-    let regions = [(bytes as usize, len), (size as usize, size_of::<usize>())];
-    // SAFETY: the caller passes `len` readable bytes and a `size_t` pointer.
-    let r = unsafe { arena_size(bytes, len, size) };
-    // SAFETY: `detail` is NULL or the caller's `mlmap_error_t`.
-    unsafe { report(detail, &regions, r) }
+    // SAFETY: forwarded contract.
+    unsafe {
+        size_query(bytes, len, size, detail, |b| {
+            let shape = StorageShape::of(b, scoring_limit).map_err(|e| Failure::decoding(e, b))?;
+            Ok(arena::layout(&shape)?.size)
+        })
+    }
 }
 
-unsafe fn arena_size(bytes: *const u8, len: usize, size: *mut usize) -> Result<usize, Failure> {
-    check_ptr(bytes)?;
-    check_ptr(size)?;
-    if !describes_memory(bytes as usize, len) {
-        return Err(MLMAP_ERR_TOO_LARGE.into());
-    }
-    if overlap(size as usize, size_of::<usize>(), bytes as usize, len) {
-        return Err(MLMAP_ERR_OVERLAP.into());
-    }
-    // SAFETY: `len` readable bytes (the caller's promise).
-    let b = unsafe { core::slice::from_raw_parts(bytes, len) };
-    let shape = StorageShape::of(b, scoring_limit).map_err(|e| Failure::decoding(e, b))?;
-    let n = arena::layout(&shape)?.size;
-    // SAFETY: non-NULL, aligned, disjoint from the bytes (checked).
-    unsafe { size.write(n) };
-    Ok(n)
+/// The arena-size queries of tables and quantized sections: `measure` the `len` bytes
+/// at `bytes`, after the checks of the arguments, into `*size`, with the details into
+/// `detail`.
+///
+/// # Safety
+///
+/// `len` readable bytes at `bytes`; `size` and `detail` NULL or the caller's.
+pub(crate) unsafe fn size_query(
+    bytes: *const u8,
+    len: usize,
+    size: *mut usize,
+    detail: *mut mlmap_error_t,
+    measure: impl FnOnce(&[u8]) -> Result<usize, Failure>,
+) -> mlmap_status_t {
+    let regions = [(bytes as usize, len), (size as usize, size_of::<usize>())];
+    let r = (|| {
+        check_ptr(bytes)?;
+        check_ptr(size)?;
+        if !describes_memory(bytes as usize, len) {
+            return Err(MLMAP_ERR_TOO_LARGE.into());
+        }
+        if overlap(size as usize, size_of::<usize>(), bytes as usize, len) {
+            return Err(MLMAP_ERR_OVERLAP.into());
+        }
+        // SAFETY: `len` readable bytes (the caller's promise).
+        let n = measure(unsafe { core::slice::from_raw_parts(bytes, len) })?;
+        // SAFETY: non-NULL, aligned, disjoint from the bytes (checked).
+        unsafe { size.write(n) };
+        Ok(n)
+    })();
+    // SAFETY: `detail` is NULL or the caller's `mlmap_error_t`.
+    unsafe { report(detail, &regions, r) }
 }
 
 const _: () = assert!(ARENA_ALIGN == 8);

@@ -229,6 +229,55 @@ unsafe fn put_outside<T>(
     unsafe { put(out, value) }
 }
 
+/// The memory of a batch of `rows` rows of K values, checked before anything is
+/// written: `rows * k` scores at `out` (of `out_len` floats), inputs of `input_size`
+/// bytes each at `input`, one objectness per row (or NULL), a `done` counter (or
+/// NULL). The scores may be written exactly over the inputs only when `in_place`
+/// (row `r` is read before row `r` is written, and no other row's inputs are
+/// touched); any other overlap of the scores with an input would feed scores back in
+/// as inputs of later rows. Returns the bytes of the scores and of `done`.
+#[allow(clippy::too_many_arguments)]
+fn batch_memory(
+    rows: usize,
+    k: usize,
+    input: (usize, usize),
+    in_place: bool,
+    objectness: *const f32,
+    out: *mut f32,
+    out_len: usize,
+    done: *mut usize,
+) -> Result<(usize, usize), mlmap_status_t> {
+    let total = rows.checked_mul(k).ok_or(MLMAP_ERR_TOO_LARGE)?;
+    if total > isize::MAX as usize / size_of::<f32>() {
+        return Err(MLMAP_ERR_TOO_LARGE);
+    }
+    if out_len < total {
+        return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
+    }
+    let bytes = total * size_of::<f32>();
+    let (x, in_bytes) = (input.0, total * input.1);
+    let os_bytes = if objectness.is_null() {
+        0
+    } else {
+        rows * size_of::<f32>()
+    };
+    let done_bytes = if done.is_null() {
+        0
+    } else {
+        size_of::<usize>()
+    };
+    let (o, d, os) = (out as usize, done as usize, objectness as usize);
+    if (!in_place && overlap(o, bytes, x, in_bytes))
+        || overlap(o, bytes, os, os_bytes)
+        || overlap(d, done_bytes, o, bytes)
+        || overlap(d, done_bytes, x, in_bytes)
+        || overlap(d, done_bytes, os, os_bytes)
+    {
+        return Err(MLMAP_ERR_OVERLAP);
+    }
+    Ok((bytes, done_bytes))
+}
+
 /// The status of a result.
 #[inline(always)]
 fn status(r: Result<(), mlmap_status_t>) -> mlmap_status_t {

@@ -8,7 +8,9 @@ use mlmap::{Head, InferError, Libm};
 
 use super::limits::{FAST_CLASSES, MAX_CLASSES};
 use super::mlmap_status_t::{self, *};
-use super::{check_ptr, mlmap_table_t, outside_table, overlap, status, table_len, view, View};
+use super::{
+    batch_memory, check_ptr, mlmap_table_t, outside_table, overlap, status, table_len, view, View,
+};
 
 /// Scores one detection with `K`, the table's class count, known at compile time: the
 /// layer's loops then have constant trip counts, as for the fixed-size Rust `Table`.
@@ -161,38 +163,17 @@ unsafe fn batch(
         Head::Open if v.open().is_none() => return Err(MLMAP_ERR_NO_OPEN_HEAD),
         _ => {}
     }
-    let total = rows.checked_mul(k).ok_or(MLMAP_ERR_TOO_LARGE)?;
-    if total > isize::MAX as usize / size_of::<f32>() {
-        return Err(MLMAP_ERR_TOO_LARGE);
-    }
-    if out_len < total {
-        return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
-    }
-    // Every pair that could alias, before anything is written. The scores may be
-    // written exactly over the logits (row `r` is read before row `r` is written, and
-    // no other row's logits are touched); any other overlap of the scores with an
-    // input would feed scores back in as inputs of later rows.
-    let bytes = total * size_of::<f32>();
-    let os_bytes = if objectness.is_null() {
-        0
-    } else {
-        rows * size_of::<f32>()
-    };
-    let done_bytes = if done.is_null() {
-        0
-    } else {
-        size_of::<usize>()
-    };
-    let (o, d) = (out as usize, done as usize);
     let in_place = out.cast_const() == logits;
-    if (!in_place && overlap(o, bytes, logits as usize, bytes))
-        || overlap(o, bytes, objectness as usize, os_bytes)
-        || overlap(d, done_bytes, o, bytes)
-        || overlap(d, done_bytes, logits as usize, bytes)
-        || overlap(d, done_bytes, objectness as usize, os_bytes)
-    {
-        return Err(MLMAP_ERR_OVERLAP);
-    }
+    let (bytes, done_bytes) = batch_memory(
+        rows,
+        k,
+        (logits as usize, size_of::<f32>()),
+        in_place,
+        objectness,
+        out,
+        out_len,
+        done,
+    )?;
     outside_table(out, bytes, table)?;
     outside_table(done, done_bytes, table)?;
     if !done.is_null() {

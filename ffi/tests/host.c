@@ -29,77 +29,15 @@
 #include <string.h>
 
 #include "mlmap.h"
-
-static unsigned passed, failed;
-
-#define CHECK(cond)                                                       \
-    do {                                                                  \
-        if (cond) {                                                       \
-            passed++;                                                     \
-        } else {                                                          \
-            failed++;                                                     \
-            fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond); \
-        }                                                                 \
-    } while (0)
-
-/* A status check that prints what came back. */
-#define EXPECT(call, want)                                                     \
-    do {                                                                       \
-        mlmap_status_t got_ = (call);                                          \
-        if (got_ == (want)) {                                                  \
-            passed++;                                                          \
-        } else {                                                               \
-            failed++;                                                          \
-            fprintf(stderr, "%s:%d: FAILED: %s\n  returned %d (%s), want %s\n", \
-                    __FILE__, __LINE__, #call, (int)got_,                      \
-                    mlmap_status_str(got_), #want);                            \
-        }                                                                      \
-    } while (0)
+#include "check.h"
 
 static mlmap_table_t table;     /* zero-initialised: no table */
 static mlmap_table_t scratch_t; /* for corruption runs */
 static mlmap_table_t small_t;
 
-static uint8_t *read_file(const char *path, size_t *len) {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        perror(path);
-        exit(2);
-    }
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    uint8_t *buf = malloc((size_t)n + 1);
-    if (!buf || fread(buf, 1, (size_t)n, f) != (size_t)n) {
-        fprintf(stderr, "%s: cannot read\n", path);
-        exit(2);
-    }
-    fclose(f);
-    buf[n] = 0;
-    *len = (size_t)n;
-    return buf;
-}
-
-/* CRC-32/ISO-HDLC (zlib's), independent of the library's. */
-static uint32_t crc32(const uint8_t *p, size_t n) {
-    uint32_t c = 0xFFFFFFFFu;
-    for (size_t i = 0; i < n; i++) {
-        c ^= p[i];
-        for (int k = 0; k < 8; k++) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
-    }
-    return ~c;
-}
-
 static void fix_crc(uint8_t *p, size_t n) {
     uint32_t c = crc32(p, n - 4);
     for (int i = 0; i < 4; i++) p[n - 4 + i] = (uint8_t)(c >> (8 * i));
-}
-
-static int same_bits(float a, float b) {
-    uint32_t x, y;
-    memcpy(&x, &a, 4);
-    memcpy(&y, &b, 4);
-    return x == y;
 }
 
 /* ------------------------------------------------------------------------------ */
@@ -822,28 +760,6 @@ static void test_one_overlap(const mlmap_table_t *t, one_fn one, const char *hea
 }
 
 /* Splits a CSV line in place (no quoting in these files). */
-static int split(char *line, char **fields, int max) {
-    int n = 0;
-    char *p = line;
-    while (n < max) {
-        fields[n++] = p;
-        char *q = strpbrk(p, ",\r\n");
-        if (!q) break;
-        char sep = *q;
-        *q = '\0';
-        if (sep != ',') break;
-        p = q + 1;
-    }
-    return n;
-}
-
-static int column(char **fields, int n, const char *name) {
-    for (int i = 0; i < n; i++)
-        if (strcmp(fields[i], name) == 0) return i;
-    fprintf(stderr, "no column %s\n", name);
-    exit(2);
-}
-
 /* Scores of every row and every head equal, bit for bit, what `mlmap apply` wrote;
  * the batch calls give the same bits; the Bayes and open scores are in [0, OS] and sum
  * to at most OS; the open head's decision is `open_pred` and the largest logit. */

@@ -24,70 +24,10 @@
 #include <string.h>
 
 #include "mlmap.h"
-
-static unsigned passed, failed;
-
-#define CHECK(cond)                                                       \
-    do {                                                                  \
-        if (cond) {                                                       \
-            passed++;                                                     \
-        } else {                                                          \
-            failed++;                                                     \
-            fprintf(stderr, "%s:%d: FAILED: %s\n", __FILE__, __LINE__, #cond); \
-        }                                                                 \
-    } while (0)
-
-#define EXPECT(call, want)                                                     \
-    do {                                                                       \
-        mlmap_status_t got_ = (call);                                          \
-        if (got_ == (want)) {                                                  \
-            passed++;                                                          \
-        } else {                                                               \
-            failed++;                                                          \
-            fprintf(stderr, "%s:%d: FAILED: %s\n  returned %d (%s), want %s\n", \
-                    __FILE__, __LINE__, #call, (int)got_,                      \
-                    mlmap_status_str(got_), #want);                            \
-        }                                                                      \
-    } while (0)
-
-static uint8_t *read_file(const char *path, size_t *len) {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        perror(path);
-        exit(2);
-    }
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    uint8_t *b = malloc((size_t)n + 1);
-    if (!b || fread(b, 1, (size_t)n, f) != (size_t)n) {
-        perror(path);
-        exit(2);
-    }
-    b[n] = 0;
-    fclose(f);
-    *len = (size_t)n;
-    return b;
-}
-
-static uint32_t crc32(const uint8_t *p, size_t n) {
-    uint32_t c = 0xFFFFFFFFu;
-    for (size_t i = 0; i < n; i++) {
-        c ^= p[i];
-        for (int k = 0; k < 8; k++) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
-    }
-    return ~c;
-}
+#include "check.h"
 
 static uint32_t u32_at(const uint8_t *p) {
     return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-static int same_bits(float a, float b) {
-    uint32_t x, y;
-    memcpy(&x, &a, 4);
-    memcpy(&y, &b, 4);
-    return x == y;
 }
 
 /* The section of a file: its last `length` bytes (docs/FORMAT.md: the trailer is the
@@ -100,21 +40,6 @@ static uint8_t *section_of(uint8_t *file, size_t len, size_t *section_len) {
 static void fix_section_crc(uint8_t *s, size_t n) {
     uint32_t c = crc32(s, n - 4);
     for (int i = 0; i < 4; i++) s[n - 4 + i] = (uint8_t)(c >> (8 * i));
-}
-
-static int split(char *line, char **fields, int max) {
-    int n = 0;
-    char *save = NULL;
-    for (char *t = strtok_r(line, ",", &save); t && n < max; t = strtok_r(NULL, ",", &save))
-        fields[n++] = t;
-    return n;
-}
-
-static int column(char **fields, int n, const char *name) {
-    for (int i = 0; i < n; i++)
-        if (strcmp(fields[i], name) == 0) return i;
-    fprintf(stderr, "no column %s\n", name);
-    exit(2);
 }
 
 static MLMAP_ALIGN8 uint8_t arena[MLMAP_QTABLE_ARENA_SIZE(3)];

@@ -13,7 +13,7 @@ use mlmap::lent::{LentQTable, QClass, QLogit, EMPTY_QCLASS, EMPTY_QLOGIT};
 use mlmap::{QField, QTableError};
 
 use super::arena::Failure;
-use super::decode::describes_memory;
+use super::decode::{describes_memory, size_query};
 use super::detail::{mlmap_error_t, mlmap_field_t, report};
 use super::limits::MAX_CLASSES;
 use super::mlmap_status_t::{self, *};
@@ -176,28 +176,8 @@ pub unsafe extern "C" fn mlmap_qtable_arena_size(
     size: *mut usize,
     detail: *mut mlmap_error_t,
 ) -> mlmap_status_t {
-    let regions = [(bytes as usize, len), (size as usize, size_of::<usize>())];
-    // SAFETY: the caller passes `len` readable bytes and a `size_t` pointer.
-    let r = unsafe { arena_size(bytes, len, size) };
-    // SAFETY: `detail` is NULL or the caller's `mlmap_error_t`.
-    unsafe { report(detail, &regions, r) }
-}
-
-unsafe fn arena_size(bytes: *const u8, len: usize, size: *mut usize) -> Result<usize, Failure> {
-    check_ptr(bytes)?;
-    check_ptr(size)?;
-    if !describes_memory(bytes as usize, len) {
-        return Err(MLMAP_ERR_TOO_LARGE.into());
-    }
-    if overlap(size as usize, size_of::<usize>(), bytes as usize, len) {
-        return Err(MLMAP_ERR_OVERLAP.into());
-    }
-    // SAFETY: `len` readable bytes (the caller's promise).
-    let b = unsafe { core::slice::from_raw_parts(bytes, len) };
-    let n = arena_bytes(classes(b)?);
-    // SAFETY: non-NULL, aligned, disjoint from the bytes (checked).
-    unsafe { size.write(n) };
-    Ok(n)
+    // SAFETY: forwarded contract.
+    unsafe { size_query(bytes, len, size, detail, |b| Ok(arena_bytes(classes(b)?))) }
 }
 
 /// Validates the quantized section in `bytes` (as written by `mlmap quantize`: the

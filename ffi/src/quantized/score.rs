@@ -8,8 +8,8 @@ use mlmap::{Code, Head};
 
 use super::super::limits::{FAST_CLASSES, MAX_CLASSES};
 use super::super::mlmap_status_t::{self, *};
-use super::super::{check_ptr, overlap, status};
-use super::{handle, mlmap_qtable_t, outside, Control, P};
+use super::super::{batch_memory, check_ptr, status};
+use super::{handle, mlmap_qtable_t, outside, Control};
 
 /// The head of a `head` argument.
 fn head_of(head: i32) -> Result<Head, mlmap_status_t> {
@@ -140,37 +140,19 @@ unsafe fn batch<Q: Code>(
         _ => {}
     }
     let k = q.k();
-    let total = rows.checked_mul(k).ok_or(MLMAP_ERR_TOO_LARGE)?;
-    if total > isize::MAX as usize / size_of::<f32>() {
-        return Err(MLMAP_ERR_TOO_LARGE);
-    }
-    if out_len < total {
-        return Err(MLMAP_ERR_BUFFER_TOO_SMALL);
-    }
-    let bytes = total * size_of::<f32>();
-    let code_bytes = total * size_of::<Q>();
-    let os_bytes = if objectness.is_null() {
-        0
-    } else {
-        rows * size_of::<f32>()
-    };
-    let done_bytes = if done.is_null() { 0 } else { P };
-    let (o, d, x, os) = (
-        out as usize,
-        done as usize,
-        codes as usize,
-        objectness as usize,
-    );
-    // A batch does not copy its inputs: the scores must not overlap the codes, the
-    // objectness or `done`, and `done` none of them.
-    if overlap(o, bytes, x, code_bytes)
-        || overlap(o, bytes, os, os_bytes)
-        || overlap(d, done_bytes, o, bytes)
-        || overlap(d, done_bytes, x, code_bytes)
-        || overlap(d, done_bytes, os, os_bytes)
-    {
-        return Err(MLMAP_ERR_OVERLAP);
-    }
+    // A batch does not copy its inputs, and a row of scores is wider than a row of
+    // codes: the scores must not overlap the codes at all.
+    let (bytes, done_bytes) = batch_memory(
+        rows,
+        k,
+        (codes as usize, size_of::<Q>()),
+        false,
+        objectness,
+        out,
+        out_len,
+        done,
+    )?;
+    let (o, d) = (out as usize, done as usize);
     outside(c, o, bytes)?;
     outside(c, d, done_bytes)?;
     if !done.is_null() {
