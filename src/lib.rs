@@ -72,13 +72,13 @@ pub use mlmap_core::baseline;
 pub use mlmap_core::lidar;
 pub use mlmap_core::{
     argmax, check_class_name, check_class_names, decide, locate_malformed, objectness_logit,
-    refused_char, scores_from_evidence, Axis, Backend, BatchError, BayesView, BodyPart, Bounded,
-    BoundedTable, CharKind, ClassName, ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian,
-    GaussianError, Head, Histogram, HistogramError, InferError, Knot, Libm, MapError, NameError,
-    OpenParams, RecalMap, Scores, Settings, Table, TableError, TableView, UpperTail,
-    FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON, MAX_KNOTS, MAX_LAMBDA,
-    MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX, NAME_RULE_VERSION,
-    VARIANCE_FLOOR,
+    refused_char, scores_from_evidence, Axis, Backend, BatchError, BayesBackend, BayesView,
+    BodyPart, Bounded, BoundedTable, CharKind, ClassName, ClassSpec, DecodeError, EdgeMode,
+    EncodeError, Gaussian, GaussianError, Head, Histogram, HistogramError, InferError, Knot, Libm,
+    MapBackend, MapError, NameError, OpenBackend, OpenParams, RecalMap, Scores, Settings, Table,
+    TableError, TableView, UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON,
+    MAX_KNOTS, MAX_LAMBDA, MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX,
+    NAME_RULE_VERSION, VARIANCE_FLOOR,
 };
 
 pub mod embedded;
@@ -95,8 +95,9 @@ pub use mlmap_core::__embed;
 
 // The quantized table (int8 / int16 logits).
 pub use mlmap_core::{
-    code_range, dequantize, quantize_into, quantized_len, Code, QField, QParams, QTable,
-    QTableError, QuantizeError, MAX_LOG_TERM, MAX_MASS, QUANTIZED_MAGIC, QUANTIZED_VERSION,
+    code_range, dequantize, quantize_into, quantized_len, AnyCode, Code, QField, QParams, QTable,
+    QTableError, QTableInner, QuantizeError, MAX_LOG_TERM, MAX_MASS, QUANTIZED_MAGIC,
+    QUANTIZED_VERSION,
 };
 
 // Runtime safety: the drift monitor (DESIGN §7), the conformal class sets (DESIGN §8)

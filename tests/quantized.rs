@@ -655,7 +655,7 @@ fn open_record_layout() {
         assert_eq!(open_bits(q2.open_params()), open_bits(with.open()));
         let mut out = [0.0f32; 3];
         assert_eq!(
-            q1.score_into(mlmap::Head::Open, &[0, 1, 2], 1.0, &mut out),
+            q1.score_i32_into(mlmap::Head::Open, &[0, 1, 2], 1.0, &mut out, &mut [0.0; 7]),
             Err(InferError::NoOpenHead)
         );
         // Without the Bayes head there is no open head, and the section is version 1.
@@ -665,7 +665,7 @@ fn open_record_layout() {
         assert_eq!(b[4], 1);
         let q = mlmap::host::DynQTable::from_bytes(b).unwrap();
         assert_eq!(
-            q.score_into(mlmap::Head::Open, &[0, 1, 2], 1.0, &mut out),
+            q.score_i32_into(mlmap::Head::Open, &[0, 1, 2], 1.0, &mut out, &mut [0.0; 7]),
             Err(InferError::NoOpenHead)
         );
     }
@@ -1183,7 +1183,8 @@ mod random {
         for &head in heads {
             for os in [1.0f32, 0.43] {
                 let (mut got, mut want) = (vec![0.0f32; k], vec![0.0f32; k]);
-                q.score_into(head, codes, os, &mut got).unwrap();
+                q.score_i32_into(head, codes, os, &mut got, &mut vec![0.0; q.scratch_len()])
+                    .unwrap();
                 t.view()
                     .score_into(head, &x, os, &mut want, &mut vec![0.0; k + 1])
                     .unwrap();
@@ -1280,7 +1281,7 @@ mod random {
                 let mut codes = vec![0; k];
                 codes[k - 1] = 128;
                 prop_assert_eq!(
-                    q.score_into(Head::Ml, &codes, 1.0, &mut out),
+                    q.score_i32_into(Head::Ml, &codes, 1.0, &mut out, &mut vec![0.0; q.scratch_len()]),
                     Err(mlmap::InferError::CodeRange { class: (k - 1) as u16 })
                 );
             }

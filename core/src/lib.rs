@@ -66,9 +66,9 @@ pub use format::name::{
     NAME_RULE_VERSION,
 };
 pub use format::wire::{locate_malformed, ClassSpec, Settings, FORMAT_VERSION, MAGIC, MAX_LAMBDA};
-pub use heads::bayes::{objectness_logit, BayesView, MAX_LAMBDA_BAYES};
-pub use heads::layer::{argmax, decide, scores_from_evidence, Scores};
-pub use heads::open::{OpenParams, MAX_EPSILON, MAX_TEMPERATURE, MIN_TEMPERATURE};
+pub use heads::bayes::{objectness_logit, BayesBackend, BayesView, MAX_LAMBDA_BAYES};
+pub use heads::layer::{argmax, decide, scores_from_evidence, MapBackend, Scores};
+pub use heads::open::{OpenBackend, OpenParams, MAX_EPSILON, MAX_TEMPERATURE, MIN_TEMPERATURE};
 pub use heads::recal::{Knot, RecalMap, MAX_KNOTS};
 pub use math::gaussian::{Gaussian, GaussianError, VARIANCE_FLOOR};
 pub use math::histogram::{
@@ -76,8 +76,8 @@ pub use math::histogram::{
 };
 pub use math::{Backend, Libm};
 pub use quantized::qtable::{
-    code_range, dequantize, Code, QField, QTable, QTableError, MAX_LOG_TERM, MAX_MASS,
-    QUANTIZED_MAGIC, QUANTIZED_VERSION,
+    code_range, dequantize, AnyCode, Code, QField, QTable, QTableError, QTableInner, MAX_LOG_TERM,
+    MAX_MASS, QUANTIZED_MAGIC, QUANTIZED_VERSION,
 };
 pub use quantized::quantize::{quantize_into, quantized_len, QParams, QuantizeError};
 pub use sections::conformal::{

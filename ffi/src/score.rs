@@ -4,7 +4,7 @@
 use core::mem::size_of;
 use core::ptr;
 
-use mlmap::{Head, InferError, Libm};
+use mlmap::{Head, InferError, MapBackend};
 
 use super::limits::{FAST_CLASSES, MAX_CLASSES};
 use super::mlmap_status_t::{self, *};
@@ -28,7 +28,7 @@ fn score_k<const K: usize>(
     let mut scratch = [0.0f32; K];
     match head {
         Head::Ml => v.ml_into(x, objectness, out, &mut scratch),
-        Head::Map => v.map_into::<Libm>(x, objectness, out, &mut scratch),
+        Head::Map => v.map_into::<MapBackend>(x, objectness, out, &mut scratch),
         Head::Bayes | Head::Open => score_categories(v, head, x, objectness, out),
     }
 }
@@ -67,7 +67,7 @@ fn score(
                     let s = scratch.get_mut(..x.len()).unwrap_or(&mut []);
                     match head {
                         Head::Ml => v.ml_into(x, objectness, out, s),
-                        Head::Map => v.map_into::<Libm>(x, objectness, out, s),
+                        Head::Map => v.map_into::<MapBackend>(x, objectness, out, s),
                         Head::Bayes | Head::Open => score_categories(v, head, x, objectness, out),
                     }
                 }

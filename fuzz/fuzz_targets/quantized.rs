@@ -97,7 +97,8 @@ fn read_all(bytes: &[u8]) {
         for os in [1.0f32, 0.3] {
             for head in [Head::Ml, Head::Map, Head::Bayes] {
                 let mut out = vec![0.0f32; k];
-                match d.score_into(head, &codes, os, &mut out) {
+                match d.score_i32_into(head, &codes, os, &mut out, &mut vec![0.0; d.scratch_len()])
+                {
                     Ok(()) => {
                         let sum = if head == Head::Bayes {
                             Sum::AtMost
@@ -204,7 +205,13 @@ fn c_api(bytes: &[u8]) {
             .zip(0..)
         {
             let mut want = vec![0.0f32; k];
-            let r = d.score_into(head, &codes, 0.7, &mut want);
+            let r = d.score_i32_into(
+                head,
+                &codes,
+                0.7,
+                &mut want,
+                &mut vec![0.0; d.scratch_len()],
+            );
             let mut out = vec![0.0f32; k];
             // SAFETY: K codes of the section's width, K floats.
             let s = unsafe {
@@ -278,7 +285,7 @@ fn build(mut data: &[u8]) {
             .collect();
         for head in [Head::Ml, Head::Map, Head::Bayes] {
             let (mut got, mut want) = ([0.0f32; 3], [0.0f32; 3]);
-            q.score_into(head, &codes, os, &mut got)
+            q.score_i32_into(head, &codes, os, &mut got, &mut [0.0; 7])
                 .expect("valid codes");
             dynt.view()
                 .score_into(head, &x, os, &mut want, &mut [0.0; 4])

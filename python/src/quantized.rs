@@ -67,9 +67,10 @@ impl PyTable {
         let os = arrays::objectness(objectness, "objectness", n)?;
         let col = os.column()?;
         let mut out = vec![0f32; n * k];
+        let mut scratch = vec![0f32; q.scratch_len()];
         let scored = py.detach(|| -> Result<(), (usize, InferError)> {
             for (row, (c, s)) in all.chunks_exact(k).zip(out.chunks_exact_mut(k)).enumerate() {
-                q.score_into(head, c, col.get_f32(row), s)
+                q.score_i32_into(head, c, col.get_f32(row), s, &mut scratch)
                     .map_err(|e| (row, e))?;
             }
             Ok(())

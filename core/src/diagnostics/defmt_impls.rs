@@ -315,16 +315,26 @@ impl Format for crate::QuantizeError {
     }
 }
 
-impl<const K: usize, Q: crate::Code> Format for crate::QTable<'_, K, Q> {
+impl<'a, C, L, Q> Format for crate::QTableInner<'a, C, L, Q>
+where
+    C: AsRef<[crate::lent::QClass<'a>]>,
+    L: AsRef<[crate::lent::QLogit<'a>]>,
+{
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
-            "QTable(K = {}, int{}, {} bytes, Bayes {})",
-            K,
-            Q::BITS,
+            "QTable {{ K: {}, bits: {}, bytes: {}, categories: {} }}",
+            self.k(),
+            self.bits(),
             self.section_len(),
-            self.has_bayes()
+            self.categories()
         )
+    }
+}
+
+impl Format for crate::AnyCode {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "AnyCode")
     }
 }
 
@@ -455,19 +465,5 @@ impl Format for crate::BayesSpec {
 impl Format for crate::DynTable {
     fn format(&self, f: Formatter<'_>) {
         write!(f, "DynTable {{ {} }}", self.view())
-    }
-}
-
-#[cfg(feature = "alloc")]
-impl Format for crate::DynQTable<'_> {
-    fn format(&self, f: Formatter<'_>) {
-        write!(
-            f,
-            "DynQTable(K = {}, int{}, {} bytes, Bayes {})",
-            self.k(),
-            self.bits(),
-            self.section_len(),
-            self.has_bayes()
-        )
     }
 }

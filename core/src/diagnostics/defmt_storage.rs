@@ -5,9 +5,7 @@
 use defmt::{write, Format, Formatter};
 
 use crate::lidar::{Calibration, LidarError, Pixel, Projected, Projection, R0};
-use crate::storage::lent::{
-    ArenaLayout, LentBayes, LentQTable, LentTable, QClass, QLogit, StorageShape,
-};
+use crate::storage::lent::{ArenaLayout, LentBayes, LentTable, QClass, QLogit, StorageShape};
 
 impl Format for StorageShape {
     fn format(&self, f: Formatter<'_>) {
@@ -120,18 +118,6 @@ impl Format for R0 {
             Self::GsMean => write!(f, "GsMean"),
             Self::Nearest => write!(f, "Nearest"),
         }
-    }
-}
-
-impl Format for LentQTable<'_, '_> {
-    fn format(&self, f: Formatter<'_>) {
-        write!(
-            f,
-            "LentQTable {{ K: {}, bits: {}, categories: {} }}",
-            self.k(),
-            self.bits(),
-            self.categories()
-        )
     }
 }
 

@@ -35,6 +35,11 @@ use crate::heads::open::OpenParams;
 use crate::math::histogram::{Axis, FREQUENCY_SUM_TOLERANCE};
 use crate::math::{self, Backend};
 
+/// The Bayes head's backend when none is named ([`Table::bayes`](crate::Table::bayes),
+/// `score_into`, the quantized head, the C API): the crate's own
+/// [`FastMath`](crate::FastMath) `exp` for the softmax.
+pub type BayesBackend = crate::FastMath;
+
 /// The Bayes head of a table, borrowed from its storage.
 ///
 /// `terms` is laid out logit-major: the log-terms of logit `j` and bin `b` for the `C`
@@ -207,30 +212,67 @@ impl<'a> BayesView<'a> {
             *l = prior;
         }
         let cats = l.len();
+        let terms = self.terms;
         let mut offset = 0usize;
-        for (axis, &x) in self.axes.iter().zip(logits) {
-            let row = axis.bin(x).and_then(|bin| {
-                self.terms
-                    .get((offset + bin) * cats..(offset + bin + 1) * cats)
-            });
-            match row {
-                Some(row) => {
-                    for (l, &t) in l.iter_mut().zip(row) {
-                        *l += t;
-                    }
-                }
-                None => {
-                    for l in l.iter_mut() {
-                        *l += self.log_lambda;
-                    }
-                }
-            }
+        let rows = self.axes.iter().zip(logits).map(|(axis, &x)| {
+            let row = axis
+                .bin(x)
+                .and_then(|bin| terms.get((offset + bin) * cats..(offset + bin + 1) * cats));
             offset += b;
-        }
+            row
+        });
+        add_rows(l, rows, self.log_lambda);
         if let Some((axis, terms)) = &self.objectness {
             add_objectness_row(axis, terms, objectness, l);
         }
         Ok(())
+    }
+}
+
+/// A stored Bayes log-term: an `f32` of a decoded table, or the four little-endian
+/// bytes of one in a quantized section (read in place).
+pub(crate) trait Term: Copy {
+    /// The term's value.
+    fn value(self) -> f32;
+}
+
+impl Term for f32 {
+    #[inline(always)]
+    fn value(self) -> f32 {
+        self
+    }
+}
+
+impl Term for [u8; 4] {
+    #[inline(always)]
+    fn value(self) -> f32 {
+        f32::from_le_bytes(self)
+    }
+}
+
+/// Adds one row of C terms per logit to the log-scores `l` (C of them, starting from the
+/// log priors), left to right over the logits; a logit outside its axis (no row) adds
+/// `ln(lambda)` to every category. The one sum of the Bayes head's log-scores, for the
+/// `f32` head ([`BayesView`]) and the quantized one.
+#[inline(always)]
+pub(crate) fn add_rows<'t, T: Term + 't>(
+    l: &mut [f32],
+    rows: impl Iterator<Item = Option<&'t [T]>>,
+    log_lambda: f32,
+) {
+    for row in rows {
+        match row {
+            Some(row) => {
+                for (l, &t) in l.iter_mut().zip(row) {
+                    *l += t.value();
+                }
+            }
+            None => {
+                for l in l.iter_mut() {
+                    *l += log_lambda;
+                }
+            }
+        }
     }
 }
 
@@ -245,7 +287,12 @@ pub(crate) fn clamp_to_axis(z: f32, axis: &Axis) -> f32 {
 /// the bin of the objectness logit clamped into `axis` (every objectness in `[0, 1]`
 /// has one). Shared by [`BayesView`] and the quantized table.
 #[inline(always)]
-pub(crate) fn add_objectness_row(axis: &Axis, terms: &[f32], objectness: f32, l: &mut [f32]) {
+pub(crate) fn add_objectness_row<T: Term>(
+    axis: &Axis,
+    terms: &[T],
+    objectness: f32,
+    l: &mut [f32],
+) {
     let cats = l.len();
     let z = clamp_to_axis(objectness_logit(objectness), axis);
     let row = axis
@@ -253,7 +300,7 @@ pub(crate) fn add_objectness_row(axis: &Axis, terms: &[f32], objectness: f32, l:
         .and_then(|bin| terms.get(bin * cats..(bin + 1) * cats));
     if let Some(row) = row {
         for (l, &t) in l.iter_mut().zip(row) {
-            *l += t;
+            *l += t.value();
         }
     }
 }

@@ -29,7 +29,12 @@
 use crate::diagnostics::error::InferError;
 use crate::math::gaussian::Gaussian;
 use crate::math::histogram::{Histogram, UpperTail};
-use crate::math::Backend;
+use crate::math::{Backend, Libm};
+
+/// The MAP head's backend when none is named ([`Table::map`](crate::Table::map),
+/// `score_into`, the quantized MAP masses, the C API): `libm`'s `exp`, so that the prior
+/// is as accurate as the platform's maths library.
+pub type MapBackend = Libm;
 
 /// The K calibrated scores of one detection (they sum to the objectness).
 #[derive(Debug, Clone, Copy, PartialEq)]

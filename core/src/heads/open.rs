@@ -26,6 +26,11 @@ use crate::diagnostics::error::{InferError, TableError};
 use crate::math::baseline;
 use crate::math::{self, Backend};
 
+/// The open head's backend when none is named ([`Table::open`](crate::Table::open),
+/// `score_into`, the quantized head, the C API): the Bayes head's, whose log-scores it
+/// shares.
+pub type OpenBackend = super::bayes::BayesBackend;
+
 /// Largest temperature a table may hold (the temperature baseline's search bound,
 /// DESIGN §1.4).
 pub const MAX_TEMPERATURE: f32 = 1.0e6;

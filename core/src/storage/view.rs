@@ -248,15 +248,7 @@ impl<'a, F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'a, F, G> {
     }
 }
 
-/// The backend of the open head's `exp` when none is named (`Table::open`): the Bayes
-/// head's, whose log-scores it shares.
-pub(crate) type OpenBackend = crate::FastMath;
-
-/// The backend of the MAP head's `exp` when none is named (`Table::map`).
-pub(crate) type MapBackend = crate::math::Libm;
-
-/// The backend of the Bayes head's softmax when none is named (`Table::bayes`).
-pub(crate) type BayesBackend = crate::FastMath;
+pub(crate) use crate::heads::{bayes::BayesBackend, layer::MapBackend, open::OpenBackend};
 
 impl<F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'_, F, G> {
     /// Scores one detection with `head` and the backend a fixed-size

@@ -32,19 +32,14 @@ use super::*;
 /// assert!(q.score_into(Head::Ml, &[50i16, -20, 10], 0.9, &mut out, &mut scratch).is_err());
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LentQTable<'s, 'a> {
-    meta: Meta<'a>,
-    classes: &'s [QClass<'a>],
-    logits: &'s [QLogit<'a>],
-}
+pub type LentQTable<'s, 'a> = QTableInner<'a, &'s [QClass<'a>], &'s [QLogit<'a>]>;
 
 /// A placeholder class record for storage [`LentQTable::from_bytes`] fills.
 pub const EMPTY_QCLASS: QClass<'static> = QClass::EMPTY;
 /// A placeholder logit record for storage [`LentQTable::from_bytes`] fills.
 pub const EMPTY_QLOGIT: QLogit<'static> = QLogit::EMPTY;
 
-impl<'s, 'a> LentQTable<'s, 'a> {
+impl<'s, 'a> QTableInner<'a, &'s [QClass<'a>], &'s [QLogit<'a>]> {
     /// The number of classes K of the quantized section in `bytes` (the section alone or
     /// after its table): the class and logit records [`LentQTable::from_bytes`] needs.
     /// Checks the trailer, the magic, the section's CRC-32 and the version first.
@@ -124,154 +119,6 @@ impl<'s, 'a> LentQTable<'s, 'a> {
             },
         )?;
         let logits: &'s [QLogit<'a>] = if meta.categories > 0 { logits } else { &[] };
-        Ok(Self {
-            meta,
-            classes,
-            logits,
-        })
-    }
-
-    #[inline(always)]
-    fn view(&self) -> QView<'_, 'a> {
-        QView {
-            meta: &self.meta,
-            classes: self.classes,
-            logits: self.logits,
-        }
-    }
-
-    /// Number of classes K.
-    #[inline]
-    pub fn k(&self) -> usize {
-        self.classes.len()
-    }
-
-    /// Bits per code: 8 or 16.
-    #[inline]
-    pub fn bits(&self) -> u8 {
-        self.meta.bits
-    }
-
-    /// Categories of the Bayes head (K or K + 1; 0 without it).
-    #[inline]
-    pub fn categories(&self) -> usize {
-        usize::from(self.meta.categories)
-    }
-
-    /// Whether the section has the Bayes head.
-    #[inline]
-    pub fn has_bayes(&self) -> bool {
-        self.meta.categories > 0
-    }
-
-    /// The open head's parameters (DESIGN §1.8), when the section has that head.
-    #[inline]
-    pub fn open_params(&self) -> Option<OpenParams> {
-        self.meta.open
-    }
-
-    /// The quantization of class `c`: `(scale, zero_point)`.
-    #[inline]
-    pub fn params(&self, c: usize) -> Option<(f32, i32)> {
-        self.classes.get(c).map(|q| (q.scale, q.zero_point))
-    }
-
-    /// The checksum of the table the section was computed from.
-    #[inline]
-    pub fn table_crc(&self) -> u32 {
-        self.meta.table_crc
-    }
-
-    /// Length of the section in bytes, trailer included.
-    #[inline]
-    pub fn section_len(&self) -> usize {
-        self.meta.len
-    }
-
-    /// Floats of scratch [`LentQTable::score_into`] needs: K plus the Bayes head's
-    /// categories (at most `2 K + 1`).
-    #[inline]
-    pub fn scratch_len(&self) -> usize {
-        self.k() + self.categories()
-    }
-
-    /// Scores one detection with `head`, as [`QTable`]'s method of that head does (the
-    /// Bayes and open heads with their default backend): `codes` and `out` hold K values,
-    /// `scratch` at least [`LentQTable::scratch_len`] floats.
-    ///
-    /// # Errors
-    ///
-    /// [`InferError::CodeWidth`] when `Q` is not the section's code width;
-    /// [`InferError::Length`] when `codes` or `out` do not hold K values or `scratch` is
-    /// short; [`InferError::Objectness`]; [`InferError::NoBayesHead`];
-    /// [`InferError::NoOpenHead`].
-    ///
-    /// # Panics
-    ///
-    /// Never.
-    #[inline]
-    pub fn score_into<Q: Code>(
-        &self,
-        head: Head,
-        codes: &[Q],
-        objectness: f32,
-        out: &mut [f32],
-        scratch: &mut [f32],
-    ) -> Result<(), InferError> {
-        if Q::BITS != self.meta.bits {
-            return Err(InferError::CodeWidth {
-                expected: self.meta.bits,
-                found: Q::BITS,
-            });
-        }
-        let k = self.k();
-        if codes.len() != k || out.len() != k {
-            return Err(InferError::Length);
-        }
-        let view = self.view();
-        let values = codes.iter().map(|q| q.value());
-        match head {
-            Head::Ml | Head::Map => {
-                let scratch = scratch.get_mut(..k).ok_or(InferError::Length)?;
-                view.masses_into(head, values, objectness, out, scratch)
-            }
-            Head::Bayes => {
-                let cats = scratch
-                    .get_mut(..self.categories())
-                    .ok_or(InferError::Length)?;
-                view.bayes_into::<BayesBackend>(values, objectness, out, cats)
-            }
-            Head::Open => {
-                let (cats, x) = scratch
-                    .get_mut(..self.scratch_len())
-                    .and_then(|s| s.split_at_mut_checked(self.categories()))
-                    .ok_or(InferError::Length)?;
-                view.open_into::<OpenBackend>(values, objectness, out, cats, x)
-            }
-        }
-    }
-
-    /// The dequantized logits of `codes` into `out` (K values each): what the scores
-    /// are exact for, and what the tie-safe decision compares (DESIGN §1.7).
-    ///
-    /// # Errors
-    ///
-    /// [`InferError::CodeWidth`] when `Q` is not the section's code width;
-    /// [`InferError::Length`] when `codes` or `out` do not hold K values.
-    #[inline]
-    pub fn logits_into<Q: Code>(&self, codes: &[Q], out: &mut [f32]) -> Result<(), InferError> {
-        if Q::BITS != self.meta.bits {
-            return Err(InferError::CodeWidth {
-                expected: self.meta.bits,
-                found: Q::BITS,
-            });
-        }
-        if codes.len() != self.k() || out.len() != self.k() {
-            return Err(InferError::Length);
-        }
-        for ((x, q), c) in out.iter_mut().zip(codes).zip(self.classes) {
-            *x = dequantize(q.value(), c.scale, c.zero_point);
-        }
-        Ok(())
+        Ok(Self::new(meta, classes, logits))
     }
 }

@@ -52,9 +52,11 @@ use crate::math::Backend;
 use crate::sections;
 use crate::storage::view::{BayesBackend, OpenBackend};
 
+mod inner;
 mod lent;
 mod score;
 mod section;
+pub use inner::{AnyCode, QTableInner};
 pub use lent::{LentQTable, EMPTY_QCLASS, EMPTY_QLOGIT};
 pub(crate) use score::QView;
 pub(crate) use section::{f32_at, index_at, index_width, locate, offset, parse, table_part, Meta};
@@ -331,15 +333,12 @@ impl core::error::Error for QTableError {}
 /// assert_eq!(q.open(&codes, 0.9)?, table.open(&x, 0.9)?);
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct QTable<'a, const K: usize, Q: Code = i8> {
-    pub(crate) meta: Meta<'a>,
-    pub(crate) classes: [QClass<'a>; K],
-    pub(crate) logits: [QLogit<'a>; K],
-    pub(crate) code: core::marker::PhantomData<Q>,
-}
+///
+/// The accessors and the run-time [`score_into`](QTableInner::score_into) are
+/// [`QTableInner`]'s, shared with the other storages of a section.
+pub type QTable<'a, const K: usize, Q = i8> = QTableInner<'a, [QClass<'a>; K], [QLogit<'a>; K], Q>;
 
-impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
+impl<'a, const K: usize, Q: Code> QTableInner<'a, [QClass<'a>; K], [QLogit<'a>; K], Q> {
     /// Reads the quantized section of `bytes`: the section alone, or a table file with
     /// the section appended (as `mlmap quantize` writes it). The section is validated
     /// and borrowed; the table before it is not decoded (only its checksum is compared
@@ -392,25 +391,7 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
                 }
             },
         )?;
-        Ok(Self {
-            meta,
-            classes,
-            logits,
-            code: core::marker::PhantomData,
-        })
-    }
-
-    #[inline(always)]
-    fn view(&self) -> QView<'_, 'a> {
-        QView {
-            meta: &self.meta,
-            classes: &self.classes,
-            logits: if self.meta.categories > 0 {
-                &self.logits
-            } else {
-                &[]
-            },
-        }
+        Ok(Self::new(meta, classes, logits))
     }
 
     /// ML scores of one detection: as [`Table::ml`](crate::Table::ml) on the
@@ -582,26 +563,6 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
         x
     }
 
-    /// Whether the section has the Bayes head.
-    #[inline]
-    pub fn has_bayes(&self) -> bool {
-        self.meta.categories > 0
-    }
-
-    /// The open head's parameters (DESIGN §1.8), when the section has that head: the
-    /// table's temperature, `epsilon` and unknown log-score, as the table decoder
-    /// derived them.
-    #[inline]
-    pub fn open_params(&self) -> Option<OpenParams> {
-        self.meta.open
-    }
-
-    /// The quantization of class `c`: `(scale, zero_point)`.
-    #[inline]
-    pub fn params(&self, c: usize) -> Option<(f32, i32)> {
-        self.classes.get(c).map(|q| (q.scale, q.zero_point))
-    }
-
     /// The precomputed ML mass of class `c` for code `q` (`L(x) + lambda_ML` of the
     /// dequantized `x`), as the scores use it.
     pub fn ml_mass(&self, c: usize, q: Q) -> Option<f32> {
@@ -611,17 +572,5 @@ impl<'a, const K: usize, Q: Code> QTable<'a, K, Q> {
     /// The precomputed MAP mass of class `c` for code `q` (`L(x) P(x) + lambda_MAP`).
     pub fn map_mass(&self, c: usize, q: Q) -> Option<f32> {
         Some(self.view().map_mass(self.classes.get(c)?, q.value()))
-    }
-
-    /// The checksum of the table the section was computed from (its last four bytes).
-    #[inline]
-    pub fn table_crc(&self) -> u32 {
-        self.meta.table_crc
-    }
-
-    /// Length of the section in bytes, trailer included.
-    #[inline]
-    pub fn section_len(&self) -> usize {
-        self.meta.len
     }
 }

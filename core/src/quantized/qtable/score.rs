@@ -137,36 +137,16 @@ impl<'a> QView<'_, 'a> {
             *l = f32::from_le_bytes(p);
         }
         let wide = self.meta.bins_bayes > 256;
-        for (lg, q) in self.logits.iter().zip(codes) {
-            let row = index_at(lg.index, wide, offset(q, lg.start)).and_then(|b| {
+        let rows = self.logits.iter().zip(codes).map(|(lg, q)| {
+            index_at(lg.index, wide, offset(q, lg.start)).and_then(|b| {
                 let at = b.checked_mul(cats)?;
                 lg.terms.get(at..at.checked_add(cats)?)
-            });
-            match row {
-                Some(row) => {
-                    for (l, &t) in scratch.iter_mut().zip(row) {
-                        *l += f32::from_le_bytes(t);
-                    }
-                }
-                None => {
-                    for l in scratch.iter_mut() {
-                        *l += self.meta.log_lambda;
-                    }
-                }
-            }
-        }
+            })
+        });
+        bayes::add_rows(scratch, rows, self.meta.log_lambda);
         // The objectness feature last, as the f32 head adds it.
         if let Some((axis, terms)) = &self.meta.objectness {
-            let z = bayes::clamp_to_axis(bayes::objectness_logit(objectness), axis);
-            let row = axis.bin(z).and_then(|b| {
-                let at = b.checked_mul(cats)?;
-                terms.get(at..at.checked_add(cats)?)
-            });
-            if let Some(row) = row {
-                for (l, &t) in scratch.iter_mut().zip(row) {
-                    *l += f32::from_le_bytes(t);
-                }
-            }
+            bayes::add_objectness_row(axis, terms, objectness, scratch);
         }
         Ok(())
     }

@@ -210,10 +210,10 @@ impl Scorer<'_> {
         let mut codes = vec![0i32; k];
         let mut x = vec![0.0f32; k];
         // One row of K scores per head, in `heads` order; scratch for the largest head
-        // (one float per Bayes category).
+        // (one float per Bayes category, and K more for a quantized open head).
         let mut scores = vec![0.0f32; k * heads.len()];
         let mut preds = vec![0usize; heads.len()];
-        let mut scratch = vec![0.0f32; self.bayes_categories.max(k)];
+        let mut scratch = vec![0.0f32; k + self.bayes_categories.max(k)];
         self.src.for_each_row(|row| -> Result<()> {
             let os = row.objectness as f32;
             let at = |e: mlmap::InferError| {
@@ -239,7 +239,8 @@ impl Scorer<'_> {
                     *d = dequantize(c, s, z);
                 }
                 for (&head, out) in heads.iter().zip(scores.chunks_exact_mut(k)) {
-                    q.score_into(head, &codes, os, out).map_err(at)?;
+                    q.score_i32_into(head, &codes, os, out, &mut scratch)
+                        .map_err(at)?;
                 }
             } else {
                 for (d, &s) in x.iter_mut().zip(row.logits) {
