@@ -202,23 +202,19 @@ pub fn check_bayes_detection<
     for r in [&fast, &libm] {
         must(invariants::check_error(x, objectness, r.err()), what);
     }
-    let mut out = [0.0f32; K];
-    let mut scratch = [0.0f32; C];
-    let mut batch = [[0.0f32; K]; 2];
-    let xs = [*x, *x];
-    let os = [objectness, objectness];
+    check_fronts::<Libm, K, B_ML, B_MAP, BB, C>(
+        t,
+        dynt,
+        Head::Bayes,
+        x,
+        objectness,
+        &fast,
+        &libm,
+        &|xs, os, out| t.bayes_batch(xs, os, out),
+        None,
+        what,
+    );
     let (Ok(fast), Ok(libm)) = (fast, libm) else {
-        let error = invariants::expected_error(x, objectness).expect("an error was expected");
-        assert_eq!(
-            dynt.bayes_into::<FastMath>(x, objectness, &mut out, &mut scratch),
-            Err(error),
-            "{what}: DynTable"
-        );
-        assert_eq!(
-            t.bayes_batch(&xs, Some(&os), &mut batch),
-            Err(mlmap::BatchError::Row { index: 0, error }),
-            "{what}: bayes_batch"
-        );
         return;
     };
     let mut want = [0.0f64; K];
@@ -257,18 +253,4 @@ pub fn check_bayes_detection<
             libm.0
         );
     }
-    let bits = |s: &[f32; K]| s.map(f32::to_bits);
-    dynt.bayes_into::<FastMath>(x, objectness, &mut out, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&out), bits(&fast.0), "{what}: DynTable differs");
-    dynt.bayes_into::<Libm>(x, objectness, &mut out, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&out), bits(&libm.0), "{what}: DynTable Libm differs");
-    t.bayes_batch(&xs, Some(&os), &mut batch)
-        .expect("valid rows");
-    assert_eq!(
-        bits(&batch[1]),
-        bits(&fast.0),
-        "{what}: bayes_batch differs"
-    );
 }

@@ -244,7 +244,6 @@ pub fn check_detection<
     fast_bound: bool,
 ) {
     check_likelihoods(t, x);
-    let expected = invariants::expected_error(x, objectness);
     let ml = t.ml(x, objectness);
     let map = t.map(x, objectness);
     let fast = t.map_with::<FastMath>(x, objectness);
@@ -255,7 +254,7 @@ pub fn check_detection<
         );
     }
     let tail = t.settings().upper_tail;
-    if let (Ok(ml), Ok(map), Ok(fast)) = (ml, map, fast) {
+    if let (Ok(ml), Ok(map), Ok(fast)) = (&ml, &map, &fast) {
         let l: [f32; K] = core::array::from_fn(|i| {
             let h = t.ml_histogram(i).expect("class exists");
             h.likelihood(x[i], tail)
@@ -282,75 +281,40 @@ pub fn check_detection<
                 );
             }
         }
-        check_same_elsewhere(t, dynt, x, objectness, [ml, map, fast]);
-    } else {
-        let mut out = [[0.0f32; K]; 1];
-        let batch = t.ml_batch(&[*x], Some(&[objectness]), &mut out);
-        let want = mlmap::BatchError::Row {
-            index: 0,
-            error: expected.expect("an error was expected"),
-        };
-        assert_eq!(batch, Err(want), "ml_batch of an invalid row");
-        let mut o = [0.0f32; K];
-        let mut scratch = [0.0f32; K];
-        assert_eq!(
-            dynt.ml_into(x, objectness, &mut o, &mut scratch),
-            Err(want_err(want))
-        );
-        assert_eq!(
-            dynt.map_into::<Libm>(x, objectness, &mut o, &mut scratch),
-            Err(want_err(want))
-        );
     }
-}
-
-fn want_err(b: mlmap::BatchError) -> mlmap::InferError {
-    match b {
-        mlmap::BatchError::Row { error, .. } => error,
-        other => panic!("not a row error: {other:?}"),
-    }
-}
-
-/// The batch API and the run-time shaped table compute the very same bits.
-fn check_same_elsewhere<
-    const K: usize,
-    const B_ML: usize,
-    const B_MAP: usize,
-    const BB: usize,
-    const C: usize,
->(
-    t: &Table<K, B_ML, B_MAP, BB, C>,
-    dynt: &DynTable,
-    x: &[f32; K],
-    objectness: f32,
-    [ml, map, fast]: [Scores<K>; 3],
-) {
-    let bits = |s: &[f32; K]| s.map(f32::to_bits);
-    let mut out = [[0.0f32; K]; 2];
-    let xs = [*x, *x];
-    let os = [objectness, objectness];
-    t.ml_batch(&xs, Some(&os), &mut out).expect("valid rows");
-    assert_eq!(bits(&out[1]), bits(&ml.0), "ml_batch differs from ml");
-    t.map_batch(&xs, Some(&os), &mut out).expect("valid rows");
-    assert_eq!(bits(&out[1]), bits(&map.0), "map_batch differs from map");
-    t.map_batch_with::<FastMath>(&xs, Some(&os), &mut out)
-        .expect("valid rows");
-    assert_eq!(
-        bits(&out[1]),
-        bits(&fast.0),
-        "map_batch_with differs from map_with"
+    // Every other front gives the same bits, or the same error.
+    let what = format_args!("x = {x:?}, OS = {objectness:e}");
+    let ml_batch =
+        |xs: &[[f32; K]], os: Option<&[f32]>, out: &mut [[f32; K]]| t.ml_batch(xs, os, out);
+    let map_batch =
+        |xs: &[[f32; K]], os: Option<&[f32]>, out: &mut [[f32; K]]| t.map_batch(xs, os, out);
+    let fast_batch = |xs: &[[f32; K]], os: Option<&[f32]>, out: &mut [[f32; K]]| {
+        t.map_batch_with::<FastMath>(xs, os, out)
+    };
+    check_fronts::<Libm, K, B_ML, B_MAP, BB, C>(
+        t,
+        dynt,
+        Head::Ml,
+        x,
+        objectness,
+        &ml,
+        &ml,
+        &ml_batch,
+        None,
+        what,
     );
-    let mut o = [0.0f32; K];
-    let mut scratch = [0.0f32; K];
-    dynt.ml_into(x, objectness, &mut o, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&o), bits(&ml.0), "DynTable ML differs");
-    dynt.map_into::<Libm>(x, objectness, &mut o, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&o), bits(&map.0), "DynTable MAP differs");
-    dynt.map_into::<FastMath>(x, objectness, &mut o, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&o), bits(&fast.0), "DynTable MAP fast differs");
+    check_fronts::<FastMath, K, B_ML, B_MAP, BB, C>(
+        t,
+        dynt,
+        Head::Map,
+        x,
+        objectness,
+        &map,
+        &fast,
+        &map_batch,
+        Some(&fast_batch),
+        what,
+    );
 }
 
 /// Most detections one fuzz input holds: small inputs keep executions fast, and the

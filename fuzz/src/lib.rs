@@ -50,6 +50,7 @@ pub fn must(result: Result<(), Violation>, context: impl Display) {
 }
 
 mod bayes;
+mod fronts;
 mod inference;
 mod maps;
 mod open;
@@ -57,6 +58,7 @@ mod structured;
 mod tables;
 
 pub use bayes::*;
+use fronts::check_fronts;
 pub use inference::*;
 pub use maps::*;
 pub use open::*;

@@ -226,29 +226,19 @@ pub fn check_open_detection<
     for r in [&fast, &libm] {
         must(invariants::check_error(x, objectness, r.err()), what);
     }
-    let view = t.view();
-    let mut out = [0.0f32; K];
-    let mut scratch = [0.0f32; C];
-    let mut batch = [[0.0f32; K]; 2];
-    let xs = [*x, *x];
-    let os = [objectness, objectness];
+    check_fronts::<Libm, K, B_ML, B_MAP, BB, C>(
+        t,
+        dynt,
+        Head::Open,
+        x,
+        objectness,
+        &fast,
+        &libm,
+        &|xs, os, out| t.open_batch(xs, os, out),
+        None,
+        what,
+    );
     let (Ok(fast), Ok(libm)) = (fast, libm) else {
-        let error = invariants::expected_error(x, objectness).expect("an error was expected");
-        assert_eq!(
-            dynt.open_into::<FastMath>(x, objectness, &mut out, &mut scratch),
-            Err(error),
-            "{what}: DynTable"
-        );
-        assert_eq!(
-            view.score_into(Head::Open, x, objectness, &mut out, &mut scratch),
-            Err(error),
-            "{what}: score_into"
-        );
-        assert_eq!(
-            t.open_batch(&xs, Some(&os), &mut batch),
-            Err(BatchError::Row { index: 0, error }),
-            "{what}: open_batch"
-        );
         return;
     };
     let mut want = [0.0f64; K];
@@ -296,18 +286,6 @@ pub fn check_open_detection<
             );
         }
     }
-    dynt.open_into::<FastMath>(x, objectness, &mut out, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&out), bits(&fast.0), "{what}: DynTable differs");
-    dynt.open_into::<Libm>(x, objectness, &mut out, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&out), bits(&libm.0), "{what}: DynTable Libm differs");
-    view.score_into(Head::Open, x, objectness, &mut out, &mut scratch)
-        .expect("valid");
-    assert_eq!(bits(&out), bits(&fast.0), "{what}: score_into differs");
-    t.open_batch(&xs, Some(&os), &mut batch)
-        .expect("valid rows");
-    assert_eq!(bits(&batch[1]), bits(&fast.0), "{what}: open_batch differs");
 }
 
 /// DESIGN §1.8: raising epsilon never raises a score, with either backend, not even by a
