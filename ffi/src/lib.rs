@@ -278,6 +278,80 @@ fn batch_memory(
     Ok((bytes, done_bytes))
 }
 
+/// The pointers of a batch call: the inputs and the scores non-NULL and aligned, the
+/// objectness and the `done` counter aligned when given (NULL: none).
+#[inline(always)]
+fn batch_pointers<T>(
+    input: *const T,
+    out: *mut f32,
+    objectness: *const f32,
+    done: *mut usize,
+) -> Result<(), mlmap_status_t> {
+    check_ptr(input)?;
+    check_ptr(out)?;
+    if !objectness.is_null() {
+        check_ptr(objectness)?;
+    }
+    if !done.is_null() {
+        check_ptr(done)?;
+    }
+    Ok(())
+}
+
+/// The row loop of every batch call: row `r` of the `rows * k` inputs at `input`, with
+/// `objectness[r]` (1 when NULL), through `score` into row `r` of `out`; `*done` (when
+/// not NULL) is 0 first and `r + 1` after row `r`. With `row_copy` (K values), each row
+/// is copied there before it is scored: a batch written exactly over its inputs.
+///
+/// # Safety
+///
+/// `batch_pointers` and `batch_memory` accepted these arguments: `rows * k` readable
+/// inputs, as many writable floats at `out`, one readable float per row at
+/// `objectness` (or NULL), a writable `done` (or NULL), the scores overlapping no input
+/// but, with `row_copy`, exactly the inputs.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn batch_rows<T: Copy>(
+    rows: usize,
+    k: usize,
+    input: *const T,
+    objectness: *const f32,
+    out: *mut f32,
+    done: *mut usize,
+    mut row_copy: Option<&mut [T]>,
+    mut score: impl FnMut(&[T], f32, &mut [f32]) -> Result<(), mlmap::InferError>,
+) -> Result<(), mlmap_status_t> {
+    if !done.is_null() {
+        // SAFETY: non-NULL, aligned, the caller's `size_t`, overlapping nothing else.
+        unsafe { done.write(0) };
+    }
+    for r in 0..rows {
+        let at = r * k;
+        // SAFETY: row `r < rows` of the `rows * k` inputs and scores, one objectness per
+        // row (the contract); a row copy holds K values and is the caller's own memory.
+        unsafe {
+            let os = if objectness.is_null() {
+                1.0
+            } else {
+                objectness.add(r).read()
+            };
+            let row: &[T] = match row_copy.as_deref_mut() {
+                Some(copy) if copy.len() == k => {
+                    core::ptr::copy_nonoverlapping(input.add(at), copy.as_mut_ptr(), k);
+                    copy
+                }
+                Some(_) => return Err(MLMAP_ERR_LENGTH),
+                None => core::slice::from_raw_parts(input.add(at), k),
+            };
+            score(row, os, core::slice::from_raw_parts_mut(out.add(at), k))?;
+            if !done.is_null() {
+                done.write(r + 1);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The status of a result.
 #[inline(always)]
 fn status(r: Result<(), mlmap_status_t>) -> mlmap_status_t {

@@ -9,7 +9,8 @@ use mlmap::{Head, InferError, MapBackend};
 use super::limits::{FAST_CLASSES, MAX_CLASSES};
 use super::mlmap_status_t::{self, *};
 use super::{
-    batch_memory, check_ptr, mlmap_table_t, outside_table, overlap, status, table_len, view, View,
+    batch_memory, batch_pointers, batch_rows, check_ptr, mlmap_table_t, outside_table, overlap,
+    status, table_len, view, View,
 };
 
 /// Scores one detection with `K`, the table's class count, known at compile time: the
@@ -146,14 +147,7 @@ unsafe fn batch(
 ) -> Result<(), mlmap_status_t> {
     // SAFETY: forwarded contract.
     let v = unsafe { view(table) }?;
-    check_ptr(logits)?;
-    check_ptr(out)?;
-    if !objectness.is_null() {
-        check_ptr(objectness)?;
-    }
-    if !done.is_null() {
-        check_ptr(done)?;
-    }
+    batch_pointers(logits, out, objectness, done)?;
     let k = v.k();
     if n_logits != k {
         return Err(MLMAP_ERR_LENGTH);
@@ -176,43 +170,23 @@ unsafe fn batch(
     )?;
     outside_table(out, bytes, table)?;
     outside_table(done, done_bytes, table)?;
-    if !done.is_null() {
-        // SAFETY: non-NULL, aligned, the caller's `size_t`, overlapping nothing else.
-        unsafe { done.write(0) };
-    }
     let mut x = [0.0f32; MAX_CLASSES];
     let x = x.get_mut(..k).ok_or(MLMAP_ERR_LENGTH)?;
-    for r in 0..rows {
-        let at = r * k;
-        // SAFETY: row `r < rows` of `rows * k` readable floats at `logits`, and of as
-        // many writable ones at `out`; one readable float per row at `objectness`. The
-        // output overlaps neither the table, nor `done`, nor the objectness, and the
-        // logits only when it is exactly them: then the row is copied out first.
-        unsafe {
-            let os = if objectness.is_null() {
-                1.0
-            } else {
-                objectness.add(r).read()
-            };
-            let input: &[f32] = if in_place {
-                ptr::copy_nonoverlapping(logits.add(at), x.as_mut_ptr(), k);
-                x
-            } else {
-                core::slice::from_raw_parts(logits.add(at), k)
-            };
-            score(
-                v,
-                head,
-                input,
-                os,
-                core::slice::from_raw_parts_mut(out.add(at), k),
-            )?;
-            if !done.is_null() {
-                done.write(r + 1);
-            }
-        }
+    // SAFETY: the checks above (the output overlaps neither the table, nor `done`, nor
+    // the objectness, and the logits only when it is exactly them: then each row is
+    // copied to `x` first).
+    unsafe {
+        batch_rows(
+            rows,
+            k,
+            logits,
+            objectness,
+            out,
+            done,
+            in_place.then_some(x),
+            |row, os, o| score(v, head, row, os, o),
+        )
     }
-    Ok(())
 }
 
 /// Scores one detection with the ML head: `out[i] = OS (L_i + lambda) / sum_j (L_j +

@@ -8,7 +8,7 @@ use mlmap::{Code, Head};
 
 use super::super::limits::{FAST_CLASSES, MAX_CLASSES};
 use super::super::mlmap_status_t::{self, *};
-use super::super::{batch_memory, check_ptr, status};
+use super::super::{batch_memory, batch_pointers, batch_rows, check_ptr, status};
 use super::{handle, mlmap_qtable_t, outside, Control};
 
 /// The head of a `head` argument.
@@ -125,14 +125,7 @@ unsafe fn batch<Q: Code>(
     // SAFETY: forwarded contract.
     let c = unsafe { checked::<Q>(qtable, n_codes) }?;
     let h = head_of(head)?;
-    check_ptr(codes)?;
-    check_ptr(out)?;
-    if !objectness.is_null() {
-        check_ptr(objectness)?;
-    }
-    if !done.is_null() {
-        check_ptr(done)?;
-    }
+    batch_pointers(codes, out, objectness, done)?;
     let q = &c.q;
     match h {
         Head::Bayes if !q.has_bayes() => return Err(MLMAP_ERR_NO_BAYES_HEAD),
@@ -155,31 +148,14 @@ unsafe fn batch<Q: Code>(
     let (o, d) = (out as usize, done as usize);
     outside(c, o, bytes)?;
     outside(c, d, done_bytes)?;
-    if !done.is_null() {
-        // SAFETY: non-NULL, aligned, the caller's `size_t`, overlapping nothing else.
-        unsafe { done.write(0) };
-    }
     let mut scratch = [0.0f32; 2 * MAX_CLASSES + 1];
-    for r in 0..rows {
-        let at = r * k;
-        // SAFETY: row `r < rows` of `rows * k` readable codes at `codes` and as many
-        // writable floats at `out`, one objectness per row; the output overlaps none
-        // of the inputs, `done`, the arena or the bytes (checked).
-        unsafe {
-            let os = if objectness.is_null() {
-                1.0
-            } else {
-                objectness.add(r).read()
-            };
-            let input = core::slice::from_raw_parts(codes.add(at), k);
-            let o = core::slice::from_raw_parts_mut(out.add(at), k);
-            q.score_into(h, input, os, o, &mut scratch)?;
-            if !done.is_null() {
-                done.write(r + 1);
-            }
-        }
+    // SAFETY: the checks above (the output overlaps none of the inputs, `done`, the
+    // arena or the bytes).
+    unsafe {
+        batch_rows(rows, k, codes, objectness, out, done, None, |row, os, o| {
+            q.score_into(h, row, os, o, &mut scratch)
+        })
     }
-    Ok(())
 }
 
 /// Scores one detection of int8 codes with `head` (an ::mlmap_head_t value): the
