@@ -16,6 +16,7 @@
 use libfuzzer_sys::fuzz_target;
 use mlmap::host::monitor::DynMonitor;
 use mlmap::{threshold_rank, ConformalSpec, Monitor, MonitorSpec, Table};
+use mlmap_fuzz::with_valid_trailer;
 
 type Shipped = Table<3, 22, 17, 22, 4>;
 const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
@@ -120,29 +121,4 @@ fn check(s: &mlmap::WindowSummary, psi: &[f32], window: u32) {
     if s.rows < window {
         assert!(!s.alarms.any());
     }
-}
-
-/// `bytes` with the trailer's length set to the whole input and its CRC recomputed.
-fn with_valid_trailer(bytes: &[u8]) -> Vec<u8> {
-    let mut b = bytes.to_vec();
-    if b.len() < 8 {
-        return b;
-    }
-    let n = b.len();
-    let len = u32::try_from(n).unwrap_or(u32::MAX).to_le_bytes();
-    b[n - 8..n - 4].copy_from_slice(&len);
-    let crc = crc32(&b[..n - 4]);
-    b[n - 4..].copy_from_slice(&crc.to_le_bytes());
-    b
-}
-
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &byte in bytes {
-        crc ^= u32::from(byte);
-        for _ in 0..8 {
-            crc = (crc >> 1) ^ (0xedb8_8320 & (crc & 1).wrapping_neg());
-        }
-    }
-    !crc
 }

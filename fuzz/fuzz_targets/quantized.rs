@@ -17,7 +17,7 @@ use libfuzzer_sys::fuzz_target;
 use mlmap::host::{DynQTable, DynTable};
 use mlmap::invariants::{check_scores, Sum};
 use mlmap::{dequantize, quantize_into, Head, QParams, QTable, Table};
-use mlmap_fuzz::must;
+use mlmap_fuzz::{must, with_valid_trailer};
 
 type Shipped = Table<3, 22, 17, 22, 4>;
 const SHIPPED: &[u8] = include_bytes!("../../tables/default.mlmap");
@@ -33,35 +33,6 @@ fuzz_target!(|data: &[u8]| {
         build(rest);
     }
 });
-
-/// `bytes` with the trailer's length set to the whole input and its CRC recomputed.
-fn with_valid_trailer(bytes: &[u8]) -> Vec<u8> {
-    let mut b = bytes.to_vec();
-    if b.len() < 8 {
-        return b;
-    }
-    let n = b.len();
-    let len = u32::try_from(n).unwrap_or(u32::MAX).to_le_bytes();
-    b[n - 8..n - 4].copy_from_slice(&len);
-    let crc = crc32(&b[..n - 4]);
-    b[n - 4..].copy_from_slice(&crc.to_le_bytes());
-    b
-}
-
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &byte in bytes {
-        crc ^= u32::from(byte);
-        for _ in 0..8 {
-            crc = if crc & 1 != 0 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
-}
 
 /// Codes worth trying on any section: the range ends, 0, and a spread.
 const CODES: [i16; 9] = [i16::MIN, -200, -128, -1, 0, 1, 127, 300, i16::MAX];

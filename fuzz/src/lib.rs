@@ -42,6 +42,22 @@ pub fn with_valid_crc(bytes: &[u8]) -> Option<Vec<u8>> {
     Some(v)
 }
 
+/// `bytes` with a section trailer's length (its last eight bytes: length, then CRC-32)
+/// set to the whole input and its CRC recomputed, so that mutated sections reach the
+/// section's parser.
+pub fn with_valid_trailer(bytes: &[u8]) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    let n = b.len();
+    if n < 8 {
+        return b;
+    }
+    let len = u32::try_from(n).unwrap_or(u32::MAX).to_le_bytes();
+    b[n - 8..n - 4].copy_from_slice(&len);
+    let crc = CRC.checksum(&b[..n - 4]);
+    b[n - 4..].copy_from_slice(&crc.to_le_bytes());
+    b
+}
+
 /// Panics with `context` and the violation's message when an invariant does not hold.
 pub fn must(result: Result<(), Violation>, context: impl Display) {
     if let Err(v) = result {
