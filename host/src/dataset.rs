@@ -345,6 +345,12 @@ impl DataSource {
     }
 }
 
+/// The names of `k` columns that have none of their own: `class0` .. `class{k-1}` (an NPY
+/// directory without `classes.txt`, numpy arrays without `classes`).
+pub fn default_class_names(k: usize) -> Vec<String> {
+    (0..k).map(|i| std::format!("class{i}")).collect()
+}
+
 /// Checks a list of class names against the rule of DESIGN §2 and §6.15: between 2 and
 /// 65535 names, each passing [`check_class_name`](mlmap_core::check_class_name), none twice.
 /// `error` builds the error for name `i` (`usize::MAX` when no single name is at

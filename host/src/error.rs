@@ -64,6 +64,7 @@ pub fn fit_message(train: &Path, e: &FitError) -> String {
         | FitError::NoLabels { .. }
         | FitError::EmptyClasses { .. }
         | FitError::Changed { .. }
+        | FitError::OutsideEdges { .. }
         | FitError::Param { .. } => e.to_string(),
         _ => std::format!("{}: {e}", train.display()),
     }

@@ -109,6 +109,7 @@ mod bayes;
 mod binpicker;
 mod error;
 mod exact;
+pub mod parts;
 mod shards;
 mod stats;
 

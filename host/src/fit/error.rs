@@ -104,6 +104,14 @@ pub enum FitError {
         /// What is wrong with the bytes.
         reason: String,
     },
+    /// Pass (b) of some rows met a value outside the edges it counts against: the edges
+    /// are not those of statistics that include these rows ([`parts`](super::parts)).
+    OutsideEdges {
+        /// The input holding the row.
+        path: PathBuf,
+        /// The row's index in that input.
+        row: u64,
+    },
     /// The objectness feature (DESIGN §1.6) was asked for and cannot be fitted: every
     /// labelled row has an objectness of 0 or 1 (no finite objectness logit), or the
     /// rows come from statistics files, which do not hold the objectness.
@@ -131,6 +139,7 @@ impl FitError {
             | Self::RowsDiffer { .. }
             | Self::ClassRowsDiffer { .. }
             | Self::Format { .. }
+            | Self::OutsideEdges { .. }
             | Self::Objectness { .. } => true,
         }
     }
@@ -230,6 +239,12 @@ impl fmt::Display for FitError {
                  {stats} rows: the shards of pass (b) are not those of pass (a)"
             ),
             Self::Format { reason } => write!(f, "not valid fit statistics: {reason}"),
+            Self::OutsideEdges { path, row } => write!(
+                f,
+                "{}: row index {row}: a training value lies outside the edges; pass (b) \
+                 needs the edges of statistics that include these rows",
+                path.display()
+            ),
         }
     }
 }

@@ -214,7 +214,7 @@ fn optional_column(
 fn class_names(dir: &Path, k: usize) -> Result<Vec<String>, DataError> {
     let path = dir.join("classes.txt");
     if !path.exists() {
-        return Ok((0..k).map(|i| std::format!("class{i}")).collect());
+        return Ok(super::default_class_names(k));
     }
     let bytes = std::fs::read(&path).map_err(|e| DataError::open(&path, &e))?;
     let text =
