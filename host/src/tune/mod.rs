@@ -19,13 +19,15 @@
 //! ([`Reference`]) behind every candidate that does not.
 //!
 //! [`search`] works on rows and histograms; [`tune`] runs the whole job on a training
-//! set and a validation file and builds the table of the best candidates.
+//! set and a validation file and builds the table of the best candidates; [`report`]
+//! is its result as data, which `mlmap tune --format json` and `mlmap.tune` render.
 
 mod bayes;
 mod grid;
 mod open;
 mod pipeline;
 mod recal;
+mod report;
 
 use std::prelude::rust_2021::*;
 use std::{format, vec};
@@ -35,6 +37,9 @@ pub use self::grid::{bayes_lambda_grid, lambda_grid, parse_bins, MAX_CANDIDATES}
 pub use self::open::{epsilon_grid, search_open, OpenSearchParams};
 pub use self::pipeline::{tune, BayesGrid, Compared, Comparison, TuneParams, Tuned};
 pub use self::recal::{choose_maps, fit_map, MapChoice, MAP_GROUPS, MIN_SHARE};
+pub use self::report::{
+    compared_keys, compared_value, energy_value, report, ReportValue, COMPARED,
+};
 use crate::metrics::{Accumulator, Metrics, MetricsConfig, Parts};
 use crate::names::{Name, Named};
 use mlmap_core::{scores_from_evidence, Gaussian, Head, Histogram, Libm, UpperTail};
