@@ -2,9 +2,6 @@
 //! the written table added) and the dict `mlmap.tune` returns, built here once and
 //! rendered by each.
 
-use std::string::{String, ToString};
-use std::vec::Vec;
-
 use super::{Candidate, Comparison, TuneParams, Tuned};
 use crate::eval::{Method, Ranking};
 use crate::metrics::Metrics;
@@ -235,4 +232,35 @@ pub fn report(tuned: &Tuned, params: &TuneParams, top: usize) -> ReportValue {
         out.add("maps", maps.done());
     }
     out.done()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_keep_their_type_and_undefined_is_null() {
+        assert_eq!(ReportValue::finite(Some(f64::NAN)), ReportValue::Null);
+        assert_eq!(ReportValue::finite(None), ReportValue::Null);
+        assert_eq!(ReportValue::finite(Some(0.25)), ReportValue::Float(0.25));
+        assert_eq!(ReportValue::from(0.1f32), ReportValue::Single(0.1));
+        assert_eq!(ReportValue::from(Some(3usize)), ReportValue::Int(3));
+        assert_eq!(ReportValue::from(None::<f64>), ReportValue::Null);
+        // A non-finite metric stays a number where the search reports one.
+        assert!(
+            matches!(ReportValue::from(Some(f64::INFINITY)), ReportValue::Float(x) if x.is_infinite())
+        );
+    }
+
+    #[test]
+    fn entries_keep_their_order() {
+        let mut d = Entries::default();
+        d.add("b", true);
+        d.add("a", "x");
+        let ReportValue::Map(entries) = d.done() else {
+            panic!("not a map");
+        };
+        let keys: Vec<&str> = entries.iter().map(|(k, _)| k.as_str()).collect();
+        assert_eq!(keys, ["b", "a"]);
+    }
 }
