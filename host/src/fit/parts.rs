@@ -17,15 +17,17 @@
 //! use mlmap_host::fit::parts::{self, InOrder};
 //! use mlmap_host::fit::{fit, FitParams};
 //!
-//! let rows = [(0, [2.0, -1.0]), (1, [0.5, 1.5]), (0, [3.0, 0.0]), (1, [-0.5, 2.5])];
-//! let rows: Vec<Row<'_>> = rows
-//!     .iter()
-//!     .map(|(c, x)| Row { index: 0, line: None, id: None, label: Label::Class(*c), objectness: 1.0, logits: x })
-//!     .collect();
+//! let data = [(0, [2.0, -1.0]), (1, [0.5, 1.5]), (0, [3.0, 0.0]), (1, [-0.5, 2.5])];
+//! fn row((c, x): &(usize, [f64; 2])) -> Row<'_> {
+//!     let label = Label::Class(*c);
+//!     Row { index: 0, line: None, id: None, label, objectness: 1.0, logits: x }
+//! }
+//! let rows: Vec<Row<'_>> = data.iter().map(row).collect();
 //! let classes = ["car".to_string(), "person".to_string()];
 //! let params = FitParams::default();
 //! // Two parts, read one after the other: the table of one fit over all rows.
-//! let split = [parts::Rows::new(&classes, &rows[..1]), parts::Rows::new(&classes, &rows[1..])];
+//! let (a, b) = rows.split_at(1);
+//! let split = [parts::Rows::new(&classes, a), parts::Rows::new(&classes, b)];
 //! let table = parts::fit(&split, &params, &InOrder)?;
 //! let whole = fit(&parts::Rows::new(&classes, &rows), &params)?;
 //! assert_eq!(table.to_vec()?, whole.to_vec()?);
