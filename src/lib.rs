@@ -119,9 +119,13 @@ pub use mlmap_core::{
 #[cfg_attr(docsrs, doc(cfg(feature = "micromath")))]
 pub use mlmap_core::{Micromath, MICROMATH_MAX_SCORE_ERROR};
 
+/// The host side (feature `std`): datasets, fitting, baselines, metrics, tuning,
+/// evaluation and export, in `f64`, allocating, never panicking on bad input. It is the
+/// crate `mlmap-host`, built on the same core as the layer, so the scores it reports
+/// are the device's; the `mlmap` binary and the Python package both call it.
 #[cfg(feature = "std")]
 #[cfg_attr(docsrs, doc(cfg(feature = "std")))]
-pub mod host;
+pub use mlmap_host as host;
 
 /// The README's Rust examples, compiled and run as doctests.
 #[cfg(doctest)]

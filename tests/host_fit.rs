@@ -141,7 +141,7 @@ fn matlab_edges_of_mathworks_histcounts_example() {
     // MathWorks' histcounts documentation, "Specify Number of Bins":
     //   X = [2 3 5 7 11 13 17 19 23 29]; [N,edges] = histcounts(X,6)
     //   N = 2 2 2 2 1 1, edges = 0 4.9 9.8 14.7 19.6 24.5 29.4
-    // With 3 bins (worked by hand in src/host/fit/binpicker.rs): edges 0 10 20 30,
+    // With 3 bins (worked by hand in host/src/fit/binpicker.rs): edges 0 10 20 30,
     // N = 4 4 2.
     let primes = [2.0, 3.0, 5.0, 7.0, 11.0, 13.0, 17.0, 19.0, 23.0, 29.0];
     let (_dir, src) = csv(&two_classes(&primes, &[1.0, 2.0]));

@@ -858,7 +858,7 @@ raised_bin_properties! {
 /// random tables above (`DynTable::with_bayes`) and converted to fixed shapes
 /// (`Table::try_from`), one property per invariant of §1.6.
 ///
-/// A head is built as `fit` builds it (`src/host/fit/bayes.rs`): random training rows per
+/// A head is built as `fit` builds it (`host/src/fit/bayes.rs`): random training rows per
 /// category (1 to 30, each row a bin per logit, so bins are often empty), their counts,
 /// and the terms `ln(count / n_c + lambda)` computed in `f64` and rounded to `f32`;
 /// lambda from 1e-6 to 1; the row counts scaled by 1, 1000 or 1e12 (the same

@@ -2,7 +2,7 @@
 """Reference fit in the `matlab` edge mode, independent of the Rust crate.
 
 The edges follow MATLAB's bin picker for `histcounts(x, nbins)` as described in
-src/host/fit.rs (module docs), written here again from that description in plain
+host/src/fit.rs (module docs), written here again from that description in plain
 Python floats; the histogram counts, moments and encoding reuse tools/mlmap_ref.py.
 Used to write the golden table of tests/host_fit.rs:
 

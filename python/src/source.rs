@@ -276,35 +276,3 @@ impl RowSource for ArraySource<'_> {
         Ok(())
     }
 }
-
-/// The rows of several sources, one source after the other (the training rows, then the
-/// rows taken as background): one [`RowSource`] for a pass that reads rows in order.
-/// Each row's error names its own source.
-pub struct Chained<'s, 'a>(pub &'s [ArraySource<'a>]);
-
-impl RowSource for Chained<'_, '_> {
-    fn path(&self) -> &Path {
-        self.0
-            .first()
-            .map_or(Path::new("logits"), |s| s.path.as_path())
-    }
-
-    fn classes(&self) -> &[String] {
-        self.0.first().map_or(&[], |s| s.classes)
-    }
-
-    fn has_labels(&self) -> bool {
-        self.0.iter().all(|s| s.labels.is_some())
-    }
-
-    fn for_each_row<E, F>(&self, mut f: F) -> Result<(), E>
-    where
-        E: From<DataError>,
-        F: FnMut(Row<'_>) -> Result<(), E>,
-    {
-        for s in self.0 {
-            s.for_each_row(&mut f)?;
-        }
-        Ok(())
-    }
-}

@@ -236,7 +236,9 @@ impl PyFitCounts {
         let classes = Some(edges.classes().to_vec());
         let held = Held::new(logits, labels, objectness, classes, background)?;
         let src = held.sources()?;
-        let inner = py.detach(|| counts_of(&src, edges))?;
+        let inner = py
+            .detach(|| counts_of(&src, edges))
+            .map_err(|e| fit_error(&e))?;
         Ok(Self { inner })
     }
 

@@ -1,24 +1,26 @@
 //! Fitting from numpy arrays: `mlmap.fit`, `mlmap.tune`, and the mergeable statistics
 //! of the two passes (`FitStats`, `FitEdges`, `FitCounts`, `finish`).
 //!
-//! `fit` is the library's two passes over row ranges read by the rayon pool at the same
-//! time: pass (a) statistics per range, merged; the edges; pass (b) counts per range,
-//! merged; the table. The merges are exact, so the table's bytes do not depend on the
-//! split: they are those of `mlmap fit` on the same rows. Rows given as `background`
-//! are ranges of their own, every row labelled `-1` (`mlmap fit --background FILE`).
+//! `fit` is the host's fit over parts (`mlmap::host::fit::parts`): the two passes over
+//! row ranges of the arrays, read by the rayon pool at the same time, merged exactly, so
+//! the table's bytes do not depend on the split: they are those of `mlmap fit` on the
+//! same rows. This module converts the arguments and results, gives the host the ranges
+//! (with their reading by blocks) and the pool, and releases the GIL. Rows given as
+//! `background` are ranges of their own, every row labelled `-1` (`mlmap fit
+//! --background FILE`).
 
 use std::collections::hash_map::DefaultHasher;
 use std::hash::{Hash, Hasher};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use mlmap::host::dataset::{DataError, DataErrorKind, RowSource, MAX_CLASSES};
+use mlmap::host::fit::parts::{self as host_parts, Chained, FitPart, Runner};
 use mlmap::host::fit::{
     self as host_fit, BayesParams, FitCounts, FitEdges, FitError, FitLabel, FitLogit, FitParams,
     FitStats, TrainingSet,
 };
 use mlmap::host::names::Named;
 use mlmap::host::tune::{self as host_tune, BayesGrid, Guards, Objective, TuneParams};
-use mlmap::host::DynTable;
 use mlmap::{EdgeMode, Head, UpperTail};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -28,7 +30,7 @@ use rayon::prelude::*;
 use crate::arrays::{self, value_error, Count};
 use crate::errors::host_error;
 use crate::evaluate;
-use crate::source::{ArraySource, BlockSink, Chained};
+use crate::source::{ArraySource, BlockSink};
 use crate::table::PyTable;
 
 mod mergeable;
@@ -36,9 +38,6 @@ mod search;
 
 pub use mergeable::{finish, PyFitCounts, PyFitEdges, PyFitStats};
 pub use search::tune;
-
-/// Rows per range of a parallel pass: below it, one range.
-const MIN_ROWS_PER_PART: usize = 262_144;
 
 /// A fitting error as a Python exception, with the CLI's message (parameters named by
 /// their keyword instead of their flag).
@@ -161,7 +160,7 @@ fn class_names(classes: Option<Vec<String>>, k: usize) -> PyResult<Vec<String>> 
             let e = DataError::new("classes", DataErrorKind::ClassCount { found: k });
             return Err(value_error(e.to_string()));
         }
-        None => (0..k).map(|i| format!("class{i}")).collect(),
+        None => mlmap::host::dataset::default_class_names(k),
     };
     if names.len() != k {
         return Err(value_error(format!(
@@ -265,27 +264,40 @@ impl<'py> Held<'py> {
     }
 }
 
-/// Ranges for a parallel pass over `srcs`, in order.
+/// Ranges for a parallel pass over `srcs`, in order (as many per source as the host's
+/// `part_count` gives for the pool's threads).
 fn parts<'a>(srcs: &[ArraySource<'a>]) -> Vec<ArraySource<'a>> {
-    let threads = rayon::current_num_threads().max(1);
+    let threads = rayon::current_num_threads();
     srcs.iter()
-        .flat_map(|src| {
-            let n = (src.len() / MIN_ROWS_PER_PART).clamp(1, 4 * threads);
-            src.split(n)
-        })
+        .flat_map(|src| src.split(host_parts::part_count(src.len(), threads)))
         .collect()
 }
 
-/// The first error in range order (the lowest row), or every value.
-fn in_order<T, E>(results: Vec<Result<T, E>>) -> Result<Vec<T>, E> {
-    results.into_iter().collect()
+/// The rayon pool, running the parts of a pass at the same time.
+struct Pool;
+
+impl Runner for Pool {
+    fn each<P: Sync, T: Send>(&self, parts: &[P], f: &(dyn Fn(&P) -> T + Sync)) -> Vec<T> {
+        parts.par_iter().map(f).collect()
+    }
+}
+
+/// A range of the arrays, read by blocks in place.
+impl FitPart for ArraySource<'_> {
+    fn stats_blocks(&self, stats: &mut FitStats) -> Result<bool, FitError> {
+        self.for_each_block(&mut StatsSink(stats))
+    }
+
+    fn count_blocks(&self, counts: &mut FitCounts) -> Result<bool, FitError> {
+        self.for_each_block(&mut CountsSink(counts))
+    }
 }
 
 /// Pass (a) of blocks of rows.
-struct StatsSink(FitStats);
+struct StatsSink<'s>(&'s mut FitStats);
 
-impl BlockSink for StatsSink {
-    type Error = DataError;
+impl BlockSink for StatsSink<'_> {
+    type Error = FitError;
 
     fn block<T: FitLogit, L: FitLabel>(
         &mut self,
@@ -293,106 +305,47 @@ impl BlockSink for StatsSink {
         first: usize,
         logits: &[T],
         labels: &[L],
-    ) -> Result<(), DataError> {
+    ) -> Result<(), FitError> {
         // A bad label: the row-by-row reading names it as the data files do.
         self.0
             .push_rows(logits, labels)
-            .map_err(|_| src.first_error(first..first + labels.len()))
+            .map_err(|_| src.first_error(first..first + labels.len()).into())
+    }
+}
+
+/// Pass (b) of blocks of rows.
+struct CountsSink<'s>(&'s mut FitCounts);
+
+impl BlockSink for CountsSink<'_> {
+    type Error = FitError;
+
+    fn block<T: FitLogit, L: FitLabel>(
+        &mut self,
+        src: &ArraySource<'_>,
+        first: usize,
+        logits: &[T],
+        labels: &[L],
+    ) -> Result<(), FitError> {
+        match self.0.push_rows(logits, labels) {
+            Ok(None) => Ok(()),
+            Ok(Some(i)) => Err(FitError::OutsideEdges {
+                path: src.path().to_path_buf(),
+                row: (first + i) as u64,
+            }),
+            Err(_) => Err(src.first_error(first..first + labels.len()).into()),
+        }
     }
 }
 
 /// Pass (a) over the rows of `srcs`, in parallel.
 fn stats_of(srcs: &[ArraySource<'_>]) -> Result<FitStats, FitError> {
     let classes = Chained(srcs).classes().to_vec();
-    let each = parts(srcs)
-        .par_iter()
-        .map(|p| {
-            let mut sink = StatsSink(FitStats::new(&classes));
-            if !p.for_each_block(&mut sink)? {
-                p.for_each_row(|row| {
-                    sink.0.push(&row);
-                    Ok::<(), FitError>(())
-                })?;
-            }
-            Ok::<FitStats, FitError>(sink.0)
-        })
-        .collect();
-    let mut total = FitStats::new(&classes);
-    for s in in_order(each)? {
-        total.merge(&s)?;
-    }
-    Ok(total)
-}
-
-/// Why pass (b) stopped: bad data, or a value outside the edges (in the array named,
-/// at the row given).
-enum CountError {
-    Data(DataError),
-    Outside(PathBuf, u64),
-}
-
-impl From<DataError> for CountError {
-    fn from(e: DataError) -> Self {
-        Self::Data(e)
-    }
-}
-
-/// Pass (b) of blocks of rows.
-struct CountsSink(FitCounts);
-
-impl BlockSink for CountsSink {
-    type Error = CountError;
-
-    fn block<T: FitLogit, L: FitLabel>(
-        &mut self,
-        src: &ArraySource<'_>,
-        first: usize,
-        logits: &[T],
-        labels: &[L],
-    ) -> Result<(), CountError> {
-        match self.0.push_rows(logits, labels) {
-            Ok(None) => Ok(()),
-            Ok(Some(i)) => Err(CountError::Outside(
-                src.path().to_path_buf(),
-                (first + i) as u64,
-            )),
-            Err(_) => Err(CountError::Data(
-                src.first_error(first..first + labels.len()),
-            )),
-        }
-    }
+    host_parts::stats(&parts(srcs), &classes, &Pool)
 }
 
 /// Pass (b) over the rows of `srcs`, in parallel.
-fn counts_of(srcs: &[ArraySource<'_>], edges: &FitEdges) -> PyResult<FitCounts> {
-    let each = parts(srcs)
-        .par_iter()
-        .map(|p| {
-            let mut sink = CountsSink(FitCounts::new(edges));
-            if !p.for_each_block(&mut sink)? {
-                p.for_each_row(|row| {
-                    if sink.0.push(&row) {
-                        Ok(())
-                    } else {
-                        Err(CountError::Outside(p.path().to_path_buf(), row.index))
-                    }
-                })?;
-            }
-            Ok::<FitCounts, CountError>(sink.0)
-        })
-        .collect();
-    let mut total = FitCounts::new(edges);
-    for c in in_order(each).map_err(|e| match e {
-        CountError::Data(e) => value_error(e.to_string()),
-        CountError::Outside(path, i) => value_error(format!(
-            "{}: row index {i}: a training value lies outside the edges; pass (b) needs \
-             the edges of statistics that include these rows",
-            path.display()
-        )),
-    })? {
-        total.merge(&c).map_err(|e| fit_error(&e))?;
-    }
-    Ok(total)
+fn counts_of(srcs: &[ArraySource<'_>], edges: &FitEdges) -> Result<FitCounts, FitError> {
+    host_parts::counts(&parts(srcs), edges, &Pool)
 }
 
 /// Fits a table from numpy arrays, as `mlmap fit` does from a file (the same bytes on
@@ -434,16 +387,8 @@ pub fn fit<'py>(
     let p = params(bins_ml, lambda_ml, bins_map, lambda_map, edges, tail, bayes)?;
     let held = Held::new(logits, labels, objectness, classes, background)?;
     let src = held.sources()?;
-    let table = py.detach(|| -> PyResult<DynTable> {
-        // The objectness feature needs the rows (DESIGN §1.6): the in-memory fit.
-        if p.bayes.is_some_and(|b| b.objectness) {
-            let train = TrainingSet::read(&Chained(&src)).map_err(|e| fit_error(&e))?;
-            return train.fit(&p).map_err(|e| fit_error(&e));
-        }
-        let stats = stats_of(&src).map_err(|e| fit_error(&e))?;
-        let edges = stats.edges(&p).map_err(|e| fit_error(&e))?;
-        let counts = counts_of(&src, &edges)?;
-        host_fit::finish(&stats, &counts).map_err(|e| fit_error(&e))
-    })?;
+    let table = py
+        .detach(|| host_parts::fit(&parts(&src), &p, &Pool))
+        .map_err(|e| fit_error(&e))?;
     PyTable::new(table)
 }

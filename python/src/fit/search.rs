@@ -1,6 +1,8 @@
 //! `mlmap.tune`: the search of `mlmap tune` on numpy arrays, and its report as a dict.
 
 use super::*;
+use mlmap::host::tune::ReportValue;
+use pyo3::types::{PyFloat, PyList, PyString};
 
 /// Searches bins and lambdas of every head on validation data, as `mlmap tune` does;
 /// returns `(table, report)`, the report a dict as `mlmap tune --format json` (without
@@ -151,126 +153,39 @@ pub fn tune<'py>(
     Ok((PyTable::new(tuned.table)?, report))
 }
 
-/// The keys of the comparison of `tune`, as the CLI's JSON report names them.
-const COMPARED: [&str; 6] = ["ece", "nll", "brier", "accuracy", "mean_ap", "auroc"];
-
-fn compared(m: &mlmap::host::metrics::Metrics, key: &str) -> Option<f64> {
-    match key {
-        "ece" => Some(m.ece),
-        "nll" => m.nll,
-        "brier" => Some(m.brier),
-        "accuracy" => m.accuracy,
-        "mean_ap" => m.mean_ap(),
-        "auroc" => m.auroc,
-        "ood_mean" => m.ood.map(|o| o.ood_mean),
-        "ood_auroc" => m.ood.and_then(|o| o.auroc),
-        "ood_fpr95" => m.ood.and_then(|o| o.fpr95),
-        _ => None,
-    }
-    .filter(|v| v.is_finite())
+/// A value of the host's report as a Python object.
+fn to_py<'py>(py: Python<'py>, v: &ReportValue) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        ReportValue::Null => py.None().into_bound(py),
+        ReportValue::Bool(b) => PyBool::new(py, *b).to_owned().into_any(),
+        ReportValue::Int(n) => n.into_pyobject(py)?.into_any(),
+        ReportValue::Float(x) => PyFloat::new(py, *x).into_any(),
+        ReportValue::Single(x) => PyFloat::new(py, f64::from(*x)).into_any(),
+        ReportValue::Text(t) => PyString::new(py, t).into_any(),
+        ReportValue::List(items) => {
+            let list = PyList::empty(py);
+            for item in items {
+                list.append(to_py(py, item)?)?;
+            }
+            list.into_any()
+        }
+        ReportValue::Map(entries) => {
+            let d = PyDict::new(py);
+            for (key, value) in entries {
+                d.set_item(key, to_py(py, value)?)?;
+            }
+            d.into_any()
+        }
+    })
 }
 
-/// The energy score's value of `key` in the comparison: its ranking metrics only.
-fn energy_compared(r: &mlmap::host::eval::Ranking, key: &str) -> Option<f64> {
-    match key {
-        "auroc" => r.auroc,
-        "ood_auroc" => r.ood_auroc,
-        "ood_fpr95" => r.ood_fpr95,
-        _ => None,
-    }
-    .filter(|v| v.is_finite())
-}
-
-/// `tune`'s report as a dict with the keys of `mlmap tune --format json`.
+/// `tune`'s report as a dict with the keys of `mlmap tune --format json` (the host's
+/// report, without the table's path).
 fn tune_report<'py>(
     py: Python<'py>,
     tuned: &host_tune::Tuned,
     params: &TuneParams,
     top: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let out = PyDict::new(py);
-    out.set_item("objective", params.objective.name())?;
-    let counts = PyDict::new(py);
-    for h in &tuned.result.heads {
-        counts.set_item(h.head.name(), params.candidates(h.head))?;
-    }
-    out.set_item("candidates", counts)?;
-    for h in &tuned.result.heads {
-        let list = pyo3::types::PyList::empty(py);
-        for (i, c) in h.candidates.iter().take(top).enumerate() {
-            let d = PyDict::new(py);
-            d.set_item("bins", c.bins)?;
-            d.set_item("lambda", c.lambda)?;
-            d.set_item("objective", Some(c.objective).filter(|v| v.is_finite()))?;
-            d.set_item("ece", c.ece)?;
-            d.set_item("nll", c.nll)?;
-            d.set_item("brier", c.brier)?;
-            d.set_item("accuracy", c.accuracy)?;
-            d.set_item("mean_ap", c.mean_ap)?;
-            d.set_item("within_guards", c.eligible())?;
-            if let (Some(t), Some(e)) = (c.temperature, c.epsilon) {
-                d.set_item("temperature", t)?;
-                d.set_item("epsilon", e)?;
-            }
-            d.set_item("rank", i + 1)?;
-            list.append(d)?;
-        }
-        out.set_item(h.head.name(), list)?;
-    }
-    let c = &tuned.comparison;
-    let methods = PyDict::new(py);
-    let mut keys = COMPARED.to_vec();
-    if c.ood_rows.is_some() {
-        keys.extend(["ood_mean", "ood_auroc", "ood_fpr95"]);
-    }
-    for m in &c.methods {
-        let d = PyDict::new(py);
-        for &key in &keys {
-            d.set_item(key, compared(&m.metrics, key))?;
-        }
-        if let Some(ch) = &m.chosen {
-            d.set_item("bins", ch.bins)?;
-            d.set_item("lambda", ch.lambda)?;
-            if let (Some(t), Some(e)) = (ch.temperature, ch.epsilon) {
-                d.set_item("temperature", t)?;
-                d.set_item("epsilon", e)?;
-            }
-            d.set_item("within_guards", m.excess == 0.0)?;
-        }
-        methods.set_item(m.method.name(), d)?;
-    }
-    let energy = PyDict::new(py);
-    for &key in &keys {
-        energy.set_item(key, energy_compared(&c.energy, key))?;
-    }
-    methods.set_item(mlmap::host::eval::Method::Energy.name(), energy)?;
-    let v = PyDict::new(py);
-    v.set_item("rows", c.rows)?;
-    v.set_item("ood_rows", c.ood_rows)?;
-    v.set_item("temperature", c.temperature)?;
-    v.set_item("max_accuracy_loss", params.guards.max_accuracy_loss)?;
-    v.set_item("max_map_loss", params.guards.max_map_loss)?;
-    v.set_item("methods", methods)?;
-    v.set_item("best", c.best.map(|m| m.name()))?;
-    out.set_item("validation", v)?;
-    if params.maps {
-        let maps = PyDict::new(py);
-        for m in &tuned.maps {
-            let d = PyDict::new(py);
-            d.set_item("kept", m.kept)?;
-            d.set_item(
-                "cv_ece_without",
-                Some(m.ece_without).filter(|v| v.is_finite()),
-            )?;
-            d.set_item("cv_ece_with", Some(m.ece_with).filter(|v| v.is_finite()))?;
-            d.set_item("within_guards", m.excess == 0.0)?;
-            d.set_item("adds_no_loss", m.excess <= m.excess_without)?;
-            // Lists `[x, y]`, as the JSON report has them.
-            let knots: Vec<[f32; 2]> = m.knots.iter().map(|k| [k.x, k.y]).collect();
-            d.set_item("knots", knots)?;
-            maps.set_item(m.head.name(), d)?;
-        }
-        out.set_item("maps", maps)?;
-    }
-    Ok(out)
+    Ok(to_py(py, &host_tune::report(tuned, params, top))?.cast_into::<PyDict>()?)
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use mlmap::host::eval::{Evaluation, Method};
 use mlmap::host::names::Named;
-use mlmap::host::tune::{Candidate, Comparison, Objective, TuneParams, TuneResult, Tuned};
+use mlmap::host::tune::{Comparison, Objective, TuneParams, TuneResult, Tuned};
 use mlmap::host::DynTable;
 use mlmap::Head;
 

@@ -2,6 +2,7 @@
 //! json` and the recalibration maps' verdicts.
 
 use super::*;
+use mlmap::host::tune::{compared_keys, compared_value, energy_value, report, ReportValue};
 
 /// The best `top` candidates of each head as an aligned table; `searched(head)` is the
 /// number of candidates searched. Candidates beyond the guards are marked `*`.
@@ -69,45 +70,6 @@ pub fn candidates(
     s
 }
 
-/// The keys of the comparison of `tune`, in print order.
-const COMPARED: [&str; 6] = ["ece", "nll", "brier", "accuracy", "mAP", "auroc"];
-
-/// The comparison's value of `key` for one method.
-fn compared_value(m: &mlmap::host::metrics::Metrics, key: &str) -> Option<f64> {
-    match key {
-        "ece" => Some(m.ece),
-        "nll" => m.nll,
-        "brier" => Some(m.brier),
-        "accuracy" => m.accuracy,
-        "mAP" => m.mean_ap(),
-        "auroc" => m.auroc,
-        "ood_mean" => m.ood.map(|o| o.ood_mean),
-        "ood_auroc" => m.ood.and_then(|o| o.auroc),
-        "ood_fpr95" => m.ood.and_then(|o| o.fpr95),
-        _ => None,
-    }
-}
-
-/// The keys of the comparison, `ood_mean`, `ood_auroc` and `ood_fpr95` with
-/// never-seen objects.
-fn compared_keys(c: &Comparison) -> Vec<&'static str> {
-    let mut keys = COMPARED.to_vec();
-    if c.ood_rows.is_some() {
-        keys.extend(["ood_mean", "ood_auroc", "ood_fpr95"]);
-    }
-    keys
-}
-
-/// The energy score's value of `key` in the comparison: its ranking metrics only.
-fn energy_value(r: &mlmap::host::eval::Ranking, key: &str) -> Option<f64> {
-    match key {
-        "auroc" => r.auroc,
-        "ood_auroc" => r.ood_auroc,
-        "ood_fpr95" => r.ood_fpr95,
-        _ => None,
-    }
-}
-
 /// The sentence naming the head to ship.
 fn best_sentence(c: &Comparison, objective: Objective) -> String {
     match c.best {
@@ -152,7 +114,8 @@ pub fn comparison(c: &Comparison, objective: Objective) -> String {
     }
     s.push('\n');
     for key in compared_keys(c) {
-        let _ = write!(s, "{key:<9}");
+        let label = if key == "mean_ap" { "mAP" } else { key };
+        let _ = write!(s, "{label:<9}");
         for m in baselines {
             let _ = write!(s, " {:>12}", fmt_value(compared_value(&m.metrics, key)));
         }
@@ -175,37 +138,30 @@ pub fn comparison(c: &Comparison, objective: Objective) -> String {
     s
 }
 
-/// One candidate in JSON, values at full precision.
-fn candidate_json(c: &Candidate) -> serde_json::Value {
-    let mut v = serde_json::json!({
-        "bins": c.bins,
-        "lambda": c.lambda,
-        "objective": finite(c.objective),
-        "ece": c.ece,
-        "nll": c.nll,
-        "brier": c.brier,
-        "accuracy": c.accuracy,
-        "mean_ap": c.mean_ap,
-        "within_guards": c.eligible(),
-    });
-    if let (Some(o), Some(t), Some(e)) = (v.as_object_mut(), c.temperature, c.epsilon) {
-        o.insert("temperature".into(), serde_json::json!(t));
-        o.insert("epsilon".into(), serde_json::json!(e));
-    }
-    v
-}
-
-/// A finite number, or null.
-fn finite(v: f64) -> serde_json::Value {
-    if v.is_finite() {
-        serde_json::json!(v)
-    } else {
-        serde_json::Value::Null
+/// A value of the report in JSON (a non-finite number is `null`).
+fn report_json(v: &ReportValue) -> serde_json::Value {
+    match v {
+        ReportValue::Null => serde_json::Value::Null,
+        ReportValue::Bool(b) => serde_json::json!(b),
+        ReportValue::Int(n) => serde_json::json!(n),
+        ReportValue::Float(x) => serde_json::json!(x),
+        ReportValue::Single(x) => serde_json::json!(x),
+        ReportValue::Text(t) => serde_json::json!(t),
+        ReportValue::List(items) => {
+            serde_json::Value::Array(items.iter().map(report_json).collect())
+        }
+        ReportValue::Map(entries) => serde_json::Value::Object(
+            entries
+                .iter()
+                .map(|(k, v)| (k.clone(), report_json(v)))
+                .collect(),
+        ),
     }
 }
 
-/// The result of `tune` as one JSON object: per head the best `top` candidates, the
-/// comparison on the validation rows, and the written table.
+/// The result of `tune` as one JSON object: the library's report (per head the best
+/// `top` candidates, the comparison on the validation rows, the maps) and the written
+/// table.
 pub fn tune_json(
     tuned: &Tuned,
     params: &TuneParams,
@@ -213,103 +169,14 @@ pub fn tune_json(
     table_path: &Path,
     table_bytes: usize,
 ) -> String {
-    let result = &tuned.result;
-    let mut v = serde_json::Map::new();
-    v.insert("objective".into(), params.objective.name().into());
-    let counts: serde_json::Map<String, serde_json::Value> = result
-        .heads
-        .iter()
-        .map(|h| (h.head.name().to_string(), params.candidates(h.head).into()))
-        .collect();
-    v.insert("candidates".into(), counts.into());
-    for h in &result.heads {
-        let list: Vec<serde_json::Value> = h
-            .candidates
-            .iter()
-            .take(top)
-            .enumerate()
-            .map(|(i, c)| {
-                let mut j = candidate_json(c);
-                if let Some(o) = j.as_object_mut() {
-                    o.insert("rank".into(), (i + 1).into());
-                }
-                j
-            })
-            .collect();
-        v.insert(h.head.name().to_string(), list.into());
+    let mut v = report_json(&report(tuned, params, top));
+    if let Some(o) = v.as_object_mut() {
+        o.insert(
+            "table".into(),
+            serde_json::json!({ "path": table_path.display().to_string(), "bytes": table_bytes }),
+        );
     }
-    let c = &tuned.comparison;
-    let mut methods = serde_json::Map::new();
-    for m in &c.methods {
-        let mut o = serde_json::Map::new();
-        for key in compared_keys(c) {
-            let name = if key == "mAP" { "mean_ap" } else { key };
-            let value = compared_value(&m.metrics, key)
-                .filter(|x| x.is_finite())
-                .map_or(serde_json::Value::Null, |x| serde_json::json!(x));
-            o.insert(name.into(), value);
-        }
-        if let Some(ch) = &m.chosen {
-            o.insert("bins".into(), ch.bins.into());
-            o.insert("lambda".into(), serde_json::json!(ch.lambda));
-            if let (Some(t), Some(e)) = (ch.temperature, ch.epsilon) {
-                o.insert("temperature".into(), serde_json::json!(t));
-                o.insert("epsilon".into(), serde_json::json!(e));
-            }
-            o.insert("within_guards".into(), (m.excess == 0.0).into());
-        }
-        methods.insert(m.method.name().to_string(), o.into());
-    }
-    let energy: serde_json::Map<String, serde_json::Value> = compared_keys(c)
-        .into_iter()
-        .map(|key| {
-            let name = if key == "mAP" { "mean_ap" } else { key };
-            let value = energy_value(&c.energy, key)
-                .filter(|x| x.is_finite())
-                .map_or(serde_json::Value::Null, |x| serde_json::json!(x));
-            (name.to_string(), value)
-        })
-        .collect();
-    methods.insert(Method::Energy.name().to_string(), energy.into());
-    v.insert(
-        "validation".into(),
-        serde_json::json!({
-            "rows": c.rows,
-            "ood_rows": c.ood_rows,
-            "temperature": c.temperature,
-            "max_accuracy_loss": params.guards.max_accuracy_loss,
-            "max_map_loss": params.guards.max_map_loss,
-            "methods": methods,
-            "best": c.best.map(|m| m.name()),
-        }),
-    );
-    if params.maps {
-        let maps: serde_json::Map<String, serde_json::Value> = tuned
-            .maps
-            .iter()
-            .map(|m| {
-                let finite = |x: f64| x.is_finite().then(|| serde_json::json!(x));
-                let knots: Vec<[f32; 2]> = m.knots.iter().map(|k| [k.x, k.y]).collect();
-                (
-                    m.head.name().to_string(),
-                    serde_json::json!({
-                        "kept": m.kept,
-                        "cv_ece_without": finite(m.ece_without),
-                        "cv_ece_with": finite(m.ece_with),
-                        "within_guards": m.excess == 0.0,
-                        "adds_no_loss": m.excess <= m.excess_without,
-                        "knots": knots,
-                    }),
-                )
-            })
-            .collect();
-        v.insert("maps".into(), maps.into());
-    }
-    v.insert(
-        "table".into(),
-        serde_json::json!({ "path": table_path.display().to_string(), "bytes": table_bytes }),
-    );
-    pretty(&serde_json::Value::Object(v))
+    pretty(&v)
 }
 
 /// What `tune` decided for each head's recalibration map (DESIGN §1.9).
