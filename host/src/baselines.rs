@@ -11,7 +11,6 @@
 //! The `f32` versions that run on the device are in [`mlmap_core::baseline`].
 
 use core::fmt;
-use std::vec::Vec;
 
 use mlmap_core::InferError;
 
@@ -324,7 +323,7 @@ pub fn score_rows(baseline: Baseline, rows: &Rows<'_>) -> Result<Vec<f64>, Basel
             return Err(BaselineError::Temperature);
         }
     }
-    let mut out = std::vec![0.0; rows.logits.len()];
+    let mut out = vec![0.0; rows.logits.len()];
     for (r, o) in out.chunks_exact_mut(rows.k).enumerate().take(n) {
         let (logits, os) = rows.row(r).ok_or(BaselineError::Shape)?;
         let res = match baseline {
@@ -416,7 +415,7 @@ pub fn fit_temperature_detailed(rows: &Rows<'_>) -> Result<TemperatureFit, Basel
     if labelled.is_empty() {
         return Err(BaselineError::NoLabelledRows);
     }
-    let mut buf = std::vec![0.0; rows.k];
+    let mut buf = vec![0.0; rows.k];
     let mut nll = |u: f64| mean_nll(&labelled, u.exp(), &mut buf);
 
     let (lim_lo, lim_hi) = (T_LIMITS.0.ln(), T_LIMITS.1.ln());

@@ -7,9 +7,6 @@
 //! and every set from the layer's [`ConformalSpec`], so what the host fits and reports
 //! is what the device computes.
 
-use std::vec;
-use std::vec::Vec;
-
 use mlmap_core::{
     conformal_section_len, section_of, set_words, table_of, threshold_rank,
     write_conformal_section, ConformalError, ConformalSpec, DynTable, Head, InferError,

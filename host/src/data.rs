@@ -2,8 +2,6 @@
 //! ([`eval`](super::eval), [`tune`](super::tune)); fitting and scoring stream instead.
 
 use std::path::Path;
-use std::string::{String, ToString};
-use std::vec::Vec;
 
 use super::dataset::{echo, DataError, DataErrorKind, DataSource, Label, Location, Row, RowSource};
 use super::error::HostError;
@@ -45,8 +43,8 @@ pub fn open_codes(path: &Path) -> Result<DataSource, HostError> {
 /// `PATH:LINE` for a CSV line, `PATH: row index I` for an NPY row (as data errors).
 pub fn at(path: &Path, location: Location) -> String {
     match location {
-        Location::Line(l) => std::format!("{}:{l}", path.display()),
-        Location::Row(r) => std::format!("{}: row index {r}", path.display()),
+        Location::Line(l) => format!("{}:{l}", path.display()),
+        Location::Row(r) => format!("{}: row index {r}", path.display()),
     }
 }
 
@@ -129,7 +127,7 @@ impl Loaded {
             } else {
                 "has no such column"
             };
-            return Err(HostError::Input(std::format!(
+            return Err(HostError::Input(format!(
                 "{}: column {:?} (--group-by): {why}",
                 path.display(),
                 echo(column)
@@ -159,7 +157,7 @@ impl Loaded {
         src.for_each_row_with_column(|row, value| -> Result<(), HostError> {
             if let Some(v) = value {
                 if v.is_empty() {
-                    return Err(HostError::Input(std::format!(
+                    return Err(HostError::Input(format!(
                         "{}: column {:?}: the group value is empty; every row needs one",
                         at(path, row.location()),
                         echo(column)
@@ -206,7 +204,7 @@ impl Loaded {
             ));
         }
         if let Some(loc) = self.first_missing_label {
-            return Err(HostError::Input(std::format!(
+            return Err(HostError::Input(format!(
                 "{}: column \"label\": the label is empty; a class name or background \
                  is needed here",
                 at(path, loc)
@@ -347,12 +345,12 @@ pub fn check_classes<'a>(
         if more == 0 {
             shown.join(", ")
         } else {
-            std::format!("{}, ... and {more} more", shown.join(", "))
+            format!("{}, ... and {more} more", shown.join(", "))
         }
     };
     Err(HostError::input(
         path,
-        std::format!(
+        format!(
             "its classes [{}] differ from the table's [{}] (same names, same order needed)",
             list(&mut data.iter().map(String::as_str), data.len()),
             list(&mut table.iter().copied(), table.len()),

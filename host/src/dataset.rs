@@ -40,8 +40,6 @@ mod npy_dir;
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::string::String;
-use std::vec::Vec;
 
 pub use error::{DataError, DataErrorKind, Location};
 
@@ -63,7 +61,7 @@ pub(crate) fn echo(text: &str) -> String {
     // Shown through `visible`: no control character reaches the terminal raw.
     match text.char_indices().nth(ECHO_CHARS) {
         None => crate::escape::visible(text).into_owned(),
-        Some((end, _)) => std::format!(
+        Some((end, _)) => format!(
             "{}... ({} bytes)",
             crate::escape::visible(text.get(..end).unwrap_or_default()),
             text.len()
@@ -348,7 +346,7 @@ impl DataSource {
 /// The names of `k` columns that have none of their own: `class0` .. `class{k-1}` (an NPY
 /// directory without `classes.txt`, numpy arrays without `classes`).
 pub fn default_class_names(k: usize) -> Vec<String> {
-    (0..k).map(|i| std::format!("class{i}")).collect()
+    (0..k).map(|i| format!("class{i}")).collect()
 }
 
 /// Checks a list of class names against the rule of DESIGN §2 and §6.15: between 2 and

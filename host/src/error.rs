@@ -4,7 +4,6 @@
 
 use core::fmt;
 use std::path::{Path, PathBuf};
-use std::string::{String, ToString};
 
 use super::dataset::DataError;
 use super::fit::FitError;
@@ -30,12 +29,12 @@ pub enum HostError {
 impl HostError {
     /// Bad input about `path`: `PATH: msg`.
     pub fn input(path: &Path, msg: impl fmt::Display) -> Self {
-        Self::Input(std::format!("{}: {msg}", path.display()))
+        Self::Input(format!("{}: {msg}", path.display()))
     }
 
     /// An internal failure about `path`: `PATH: msg`.
     pub fn internal(path: &Path, msg: impl fmt::Display) -> Self {
-        Self::Internal(std::format!("{}: {msg}", path.display()))
+        Self::Internal(format!("{}: {msg}", path.display()))
     }
 
     /// A failure to fit on the training data `train`.
@@ -66,7 +65,7 @@ pub fn fit_message(train: &Path, e: &FitError) -> String {
         | FitError::Changed { .. }
         | FitError::OutsideEdges { .. }
         | FitError::Param { .. } => e.to_string(),
-        _ => std::format!("{}: {e}", train.display()),
+        _ => format!("{}: {e}", train.display()),
     }
 }
 

@@ -8,7 +8,6 @@
 
 use std::borrow::Cow;
 use std::fmt::Write as _;
-use std::string::String;
 
 use mlmap_core::refused_char;
 

@@ -9,11 +9,7 @@
 //! -Wall -Wextra`. Class names appear only in its opening comment, escaped by
 //! [`c_comment`].
 
-use std::borrow::ToOwned;
 use std::fmt::{self, Write as _};
-use std::format;
-use std::string::String;
-use std::vec::Vec;
 
 use crate::escape::c_comment;
 use crate::DynTable;

@@ -114,8 +114,6 @@ mod shards;
 mod stats;
 
 use std::path::{Path, PathBuf};
-use std::string::{String, ToString};
-use std::vec::Vec;
 
 use crate::dataset::{Label, Row, RowSource};
 use crate::DynTable;
@@ -467,7 +465,7 @@ impl TrainingSet {
             .iter()
             .map(|c| ClassMoments::new(c.as_str()))
             .collect();
-        let mut values: Vec<Vec<f32>> = std::vec![Vec::new(); moments.len()];
+        let mut values: Vec<Vec<f32>> = vec![Vec::new(); moments.len()];
         let mut bayes = BayesMoments::new(source.classes());
         let (mut logits, mut categories, mut objectness) = (Vec::new(), Vec::new(), Vec::new());
         let k = moments.len();
@@ -735,7 +733,7 @@ mod tests {
     fn empty_classes_message_names_every_class_and_the_file() {
         let e = FitError::EmptyClasses {
             path: "t.csv".into(),
-            classes: std::vec!["cyclist".into()],
+            classes: vec!["cyclist".into()],
         };
         assert_eq!(
             e.to_string(),
@@ -744,7 +742,7 @@ mod tests {
         );
         let e = FitError::EmptyClasses {
             path: "t.csv".into(),
-            classes: std::vec!["a".into(), "b".into()],
+            classes: vec!["a".into(), "b".into()],
         };
         assert!(e
             .to_string()

@@ -28,9 +28,6 @@
 
 use std::fs;
 use std::path::Path;
-use std::string::{String, ToString};
-use std::vec;
-use std::vec::Vec;
 
 use mlmap_core::lidar::{
     collect_pixels, project, scratch_len, upsample, Calibration, LidarError, Pixel, Projected,
@@ -55,7 +52,7 @@ pub fn parse_scan(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 4]>, HostError>
     if !bytes.len().is_multiple_of(POINT_BYTES) {
         return Err(HostError::input(
             path,
-            std::format!(
+            format!(
                 "{} bytes is not a whole number of points (16 bytes each: x, y, z, \
                  reflectance as little-endian f32); the scan is truncated",
                 bytes.len()
@@ -74,7 +71,7 @@ pub fn parse_scan(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 4]>, HostError>
         if let Some((name, v)) = names.iter().zip(p).find(|(_, v)| !(v.abs() <= MAX_ABS)) {
             return Err(HostError::input(
                 path,
-                std::format!(
+                format!(
                     "point {i} (bytes {}..{}): {name} is {v}; expected a finite value of \
                      magnitude at most 1e18",
                     i * POINT_BYTES,
@@ -91,7 +88,7 @@ pub fn parse_scan(path: &Path, bytes: &[u8]) -> Result<Vec<[f32; 4]>, HostError>
 pub fn read_calibration(path: &Path) -> Result<Calibration, HostError> {
     let bytes = fs::read(path).map_err(|e| HostError::input(path, e))?;
     let text = std::str::from_utf8(&bytes)
-        .map_err(|e| HostError::input(path, std::format!("not UTF-8 text: {e}")))?;
+        .map_err(|e| HostError::input(path, format!("not UTF-8 text: {e}")))?;
     parse_calibration(path, text)
 }
 
@@ -106,12 +103,12 @@ pub fn parse_calibration(path: &Path, text: &str) -> Result<Calibration, HostErr
     let mut found: [Option<(usize, Vec<f64>)>; 3] = [None, None, None];
     for (i, line) in text.lines().enumerate() {
         let lineno = i + 1;
-        let at = |msg: String| HostError::Input(std::format!("{}:{lineno}: {msg}", path.display()));
+        let at = |msg: String| HostError::Input(format!("{}:{lineno}: {msg}", path.display()));
         let Some((key, rest)) = line.split_once(':') else {
             if line.trim().is_empty() {
                 continue;
             }
-            return Err(at(std::format!(
+            return Err(at(format!(
                 "expected `KEY: numbers`, found `{}`",
                 super::escape::visible(line.trim())
             )));
@@ -128,26 +125,24 @@ pub fn parse_calibration(path: &Path, text: &str) -> Result<Calibration, HostErr
         let mut values = Vec::with_capacity(count);
         for tok in rest.split_whitespace() {
             let v: f64 = tok.parse().map_err(|_| {
-                at(std::format!(
+                at(format!(
                     "{name}: `{}` is not a number",
                     super::escape::visible(tok)
                 ))
             })?;
             if !v.is_finite() {
-                return Err(at(std::format!("{name}: {tok} is not finite")));
+                return Err(at(format!("{name}: {tok} is not finite")));
             }
             values.push(v);
         }
         if values.len() != count {
-            return Err(at(std::format!(
+            return Err(at(format!(
                 "{name} has {} numbers; expected {count}",
                 values.len()
             )));
         }
         if let Some((first, _)) = slot {
-            return Err(at(std::format!(
-                "{name} is given twice (first on line {first})"
-            )));
+            return Err(at(format!("{name} is given twice (first on line {first})")));
         }
         *slot = Some((lineno, values));
     }
@@ -156,7 +151,7 @@ pub fn parse_calibration(path: &Path, text: &str) -> Result<Calibration, HostErr
         let Some((_, values)) = slot else {
             return Err(HostError::input(
                 path,
-                std::format!(
+                format!(
                     "no {name} line; a KITTI calibration file needs P2, R0_rect and \
                      Tr_velo_to_cam"
                 ),
@@ -303,13 +298,13 @@ pub fn parse_labels(
     let mut out = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let lineno = i + 1;
-        let at = |msg: String| HostError::Input(std::format!("{}:{lineno}: {msg}", path.display()));
+        let at = |msg: String| HostError::Input(format!("{}:{lineno}: {msg}", path.display()));
         let fields: Vec<&str> = line.split_whitespace().collect();
         let Some((&kind, rest)) = fields.split_first() else {
             continue;
         };
         if fields.len() != 15 && fields.len() != 16 {
-            return Err(at(std::format!(
+            return Err(at(format!(
                 "{} fields; a KITTI label line has 15 (or 16 with a score)",
                 fields.len()
             )));
@@ -318,7 +313,7 @@ pub fn parse_labels(
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
         {
-            return Err(at(std::format!(
+            return Err(at(format!(
                 "the type `{}` is not letters, digits, `_` and `-`",
                 super::escape::visible(kind)
             )));
@@ -330,7 +325,7 @@ pub fn parse_labels(
                 .ok()
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| {
-                    at(std::format!(
+                    at(format!(
                         "field {}: `{}` is not a finite number",
                         k + 2,
                         super::escape::visible(tok)
@@ -343,7 +338,7 @@ pub fn parse_labels(
         let [_, _, _, left, top, right, bottom, ..] = nums;
         let bbox = [left, top, right, bottom];
         if left > right || top > bottom {
-            return Err(at(std::format!(
+            return Err(at(format!(
                 "the box {left} {top} {right} {bottom} has left > right or top > bottom"
             )));
         }
@@ -355,7 +350,7 @@ pub fn parse_labels(
         let (Some((col0, col1)), Some((row0, row1))) =
             (span(left, right, width), span(top, bottom, height))
         else {
-            return Err(at(std::format!(
+            return Err(at(format!(
                 "the box {left} {top} {right} {bottom} has no pixel inside the \
                  {width} x {height} image"
             )));

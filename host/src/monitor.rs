@@ -5,9 +5,6 @@
 //! Every window metric comes from the layer's own [`MonitorSpec`], so what the host
 //! fits and replays is what the device computes.
 
-use std::vec;
-use std::vec::Vec;
-
 use mlmap_core::{
     monitor_section_len, section_of, table_of, write_monitor_section, Accumulators, DynTable,
     InferError, MonitorError, MonitorParams, MonitorSpec, MonitorState, Thresholds, WindowSummary,

@@ -9,8 +9,6 @@
 //! ([`EdgeMode`], [`UpperTail`], [`Head`]) are here.
 
 use core::fmt;
-use std::string::String;
-use std::vec::Vec;
 
 use mlmap_core::{EdgeMode, Head, UpperTail};
 

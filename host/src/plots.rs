@@ -25,13 +25,9 @@ mod stats;
 
 use std::borrow::Cow;
 use std::fmt;
-use std::format;
 use std::fs;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
-use std::string::{String, ToString};
-use std::vec;
-use std::vec::Vec;
 
 use self::draw::{class_color, method_color, Colour, LikelihoodPanel};
 use self::stats::{ece_label, pr_curve, PrCurve, ScoreHist};

@@ -8,8 +8,6 @@
 //! And the energy score (DESIGN §1.4), the unknown-object ranking baseline:
 //! `E(x) = -logsumexp(x)` (temperature 1), ranked by `-E`.
 
-use std::vec::Vec;
-
 use super::{check, scaled_softmax, BaselineError, Rows};
 use mlmap_core::InferError;
 
@@ -172,7 +170,7 @@ pub fn fit_isotonic(rows: &Rows<'_>) -> Result<Isotonic, BaselineError> {
         return Err(BaselineError::NoRows);
     }
     let k = rows.k;
-    let mut soft = std::vec![0.0; n * k];
+    let mut soft = vec![0.0; n * k];
     for (r, out) in soft.chunks_exact_mut(k).enumerate() {
         let (logits, os) = rows.row(r).ok_or(BaselineError::Shape)?;
         check(logits, os, k).map_err(|error| BaselineError::Row { row: r, error })?;
@@ -214,7 +212,7 @@ pub fn score_isotonic(iso: &Isotonic, rows: &Rows<'_>) -> Result<Vec<f64>, Basel
     if iso.maps.len() != rows.k {
         return Err(BaselineError::Shape);
     }
-    let mut out = std::vec![0.0; rows.logits.len()];
+    let mut out = vec![0.0; rows.logits.len()];
     for (r, o) in out.chunks_exact_mut(rows.k).enumerate().take(n) {
         let (logits, os) = rows.row(r).ok_or(BaselineError::Shape)?;
         iso.score(logits, os, o)

@@ -12,9 +12,7 @@ use std::fmt;
 use std::fs::File;
 use std::io::{self, Read};
 use std::path::Path;
-use std::string::{String, ToString};
 use std::sync::{Arc, Mutex, PoisonError};
-use std::vec::Vec;
 
 use super::{
     check_class_names, echo, DataError, DataErrorKind, Label, Location, Row, MAX_RECORD_BYTES,
@@ -243,7 +241,7 @@ fn csv_error(path: &Path, e: &csv::Error, rdr: &CsvReader) -> DataError {
         other => DataError::new(
             path,
             DataErrorKind::Io {
-                reason: std::format!("{other:?}"),
+                reason: format!("{other:?}"),
             },
         ),
     }
@@ -382,7 +380,7 @@ impl Schema {
     {
         let mut rdr = self.pass(path)?;
         let mut record = csv::StringRecord::new();
-        let mut logits = std::vec![0.0f64; self.logits.len()];
+        let mut logits = vec![0.0f64; self.logits.len()];
         let mut index = 0u64;
         loop {
             match rdr.read_record(&mut record) {
@@ -509,7 +507,7 @@ mod tests {
     /// lines and the problem.
     fn guard(text: &str, chunk: usize) -> (Vec<u64>, Option<Malformed>) {
         let mut g = Guarded::new(text.as_bytes());
-        let mut buf = std::vec![0u8; chunk];
+        let mut buf = vec![0u8; chunk];
         let mut problem = None;
         loop {
             match g.read(&mut buf) {

@@ -6,8 +6,6 @@
 //! [`DynTable`]), in `f32` as on the device.
 
 use std::path::Path;
-use std::string::{String, ToString};
-use std::vec::Vec;
 
 use super::baselines::{self, Baseline, Isotonic, Rows};
 use super::data::{at, check_classes, Loaded};
@@ -141,11 +139,7 @@ pub fn head_scores(
     let mut out = Vec::with_capacity(data.logits.len());
     // Scratch: K floats, or one per category for the Bayes head.
     let cats = table.bayes().map_or(k, |b| b.categories().max(k));
-    let (mut x, mut s, mut scratch) = (
-        std::vec![0f32; k],
-        std::vec![0f32; k],
-        std::vec![0f32; cats],
-    );
+    let (mut x, mut s, mut scratch) = (vec![0f32; k], vec![0f32; k], vec![0f32; cats]);
     let view = table.view();
     let rows = data.logits.chunks_exact(k).zip(&data.objectness);
     for ((xs, &os), loc) in rows.zip(&data.locations) {
@@ -155,7 +149,7 @@ pub fn head_scores(
         // Each head with the device's default backend (`Table::ml`, `map`, `bayes`,
         // `open`).
         let scored = view.score_into(head, &x, os as f32, &mut s, &mut scratch);
-        scored.map_err(|e| HostError::Input(std::format!("{}: {e}", at(path, *loc))))?;
+        scored.map_err(|e| HostError::Input(format!("{}: {e}", at(path, *loc))))?;
         out.extend(s.iter().map(|&v| f64::from(v)));
     }
     Ok(out)
@@ -360,7 +354,7 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
         Some(g) if g.len() != test.len() => {
             return Err(HostError::input(
                 test_path,
-                std::format!("{} group values for {} rows", g.len(), test.len()),
+                format!("{} group values for {} rows", g.len(), test.len()),
             ))
         }
         Some(g) => {
@@ -368,7 +362,7 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
             if rows.len() > MAX_GROUPS {
                 return Err(HostError::input(
                     test_path,
-                    std::format!(
+                    format!(
                         "the group column holds {} distinct values; at most {MAX_GROUPS} \
                          groups are reported",
                         rows.len()
@@ -396,7 +390,7 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
             k,
             &inp.config,
         )
-        .map_err(|e| HostError::input(test_path, std::format!("{method}: {e}")))?;
+        .map_err(|e| HostError::input(test_path, format!("{method}: {e}")))?;
         methods.push(MethodResult {
             method,
             test: scores,
@@ -444,7 +438,7 @@ pub fn evaluate(inp: &Inputs<'_>) -> Result<Evaluation, HostError> {
                 &inp.config,
             )
             .map_err(|e| {
-                HostError::input(test_path, std::format!("{}, group {value}: {e}", r.method))
+                HostError::input(test_path, format!("{}, group {value}: {e}", r.method))
             })?;
             g_methods.push((r.method, m));
         }

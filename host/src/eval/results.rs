@@ -2,9 +2,6 @@
 //! energy ranking, the fitted temperature and the per-group results, and the columns of
 //! the reports written from them.
 
-use std::string::String;
-use std::vec::Vec;
-
 use super::Method;
 use crate::baselines::Isotonic;
 use crate::error::HostError;
@@ -203,7 +200,7 @@ impl Evaluation {
             labels.extend(std::iter::repeat_n(None, o.len() / k.max(1)));
         }
         metrics::evaluate_with_logits(&scores, &logits, k, &labels, &self.config)
-            .map_err(|e| HostError::Input(std::format!("{}: {e}", r.method)))
+            .map_err(|e| HostError::Input(format!("{}: {e}", r.method)))
     }
 
     /// The head to ship: among the heads whose accuracy and mAP on test + unseen

@@ -6,9 +6,6 @@
 //! are the part a fit can accumulate and merge; the smoothing `lambda` enters only when
 //! the log-terms `ln(count / n_c + lambda)` are written ([`BayesCounts::spec`]).
 
-use std::string::{String, ToString};
-use std::vec::Vec;
-
 use crate::dataset::{Label, Row};
 use crate::BayesSpec;
 use mlmap_core::{Axis, EdgeMode, MAX_LAMBDA_BAYES};
@@ -100,9 +97,9 @@ impl BayesMoments {
     pub fn new<S: AsRef<str>>(names: &[S]) -> Self {
         Self {
             names: names.iter().map(|n| n.as_ref().to_string()).collect(),
-            min: std::vec![f64::INFINITY; names.len()],
-            max: std::vec![f64::NEG_INFINITY; names.len()],
-            rows: std::vec![0; names.len() + 1],
+            min: vec![f64::INFINITY; names.len()],
+            max: vec![f64::NEG_INFINITY; names.len()],
+            rows: vec![0; names.len() + 1],
         }
     }
 

@@ -3,8 +3,6 @@
 
 use std::fmt;
 use std::path::PathBuf;
-use std::string::{String, ToString};
-use std::vec::Vec;
 
 use crate::dataset::DataError;
 use crate::DynTable;
@@ -171,7 +169,7 @@ impl fmt::Display for FitError {
             ),
             Self::EmptyClasses { path, classes } => {
                 write!(f, "{}: ", path.display())?;
-                let quoted: Vec<String> = classes.iter().map(|c| std::format!("{c:?}")).collect();
+                let quoted: Vec<String> = classes.iter().map(|c| format!("{c:?}")).collect();
                 match quoted.as_slice() {
                     [one] => write!(f, "class {one} has no training rows")?,
                     many => write!(f, "classes {} have no training rows", many.join(", "))?,
@@ -282,7 +280,7 @@ impl fmt::Display for FitWarning {
                 let why = if *rows == 1 {
                     "has a single training row".to_string()
                 } else {
-                    std::format!("has {rows} training rows with the same logit")
+                    format!("has {rows} training rows with the same logit")
                 };
                 write!(
                     f,
@@ -335,12 +333,12 @@ fn name_class(e: &TableError, name: &str) -> String {
     let mut out = String::with_capacity(text.len() + name.len());
     let mut rest = text.as_str();
     for word in ["class ", "category "] {
-        let index = std::format!("{word}{i}");
+        let index = format!("{word}{i}");
         if let Some(at) = rest.find(&index) {
             let after = rest.get(at + index.len()..).unwrap_or_default();
             if !after.starts_with(|c: char| c.is_ascii_digit()) {
                 out.push_str(rest.get(..at).unwrap_or_default());
-                out.push_str(&std::format!("{word}{name:?}"));
+                out.push_str(&format!("{word}{name:?}"));
                 rest = after;
             }
         }

@@ -16,8 +16,6 @@
 //! ([`mean`], [`sample_variance`]): each is the exact rational rounded once to the
 //! nearest `f64` (except below `2^-1022`, where the result may be rounded twice).
 
-use std::vec::Vec;
-
 use num_bigint::{BigInt, BigUint, Sign};
 
 /// Chunks of a sum of values: bits `0..2176` in units of `2^-1074`. A finite value
@@ -479,7 +477,7 @@ mod tests {
         assert_eq!(mean(3, &s1), 1.0 / 3.0);
         // The extremes of the range, and cancellation to exactly zero.
         let (s1, s2) = sums(&[f64::MAX, f64::from_bits(1), -f64::MAX, -f64::from_bits(1)]);
-        assert_eq!(s1.to_words(), (0, std::vec![]));
+        assert_eq!(s1.to_words(), (0, vec![]));
         // 2 (MAX^2 + tiny^2) in units of 2^-2148: MAX = m 2^(2045 - 1074), tiny = 2^-1074.
         let m = BigInt::from((1u64 << 53) - 1);
         let want = BigInt::from(2) * (&m * &m * (BigInt::from(1) << (2 * 2045u32)) + 1);
@@ -519,7 +517,7 @@ mod tests {
     fn f32_buckets_give_the_sums_of_the_values_as_f64() {
         // Every kind of f32: zeros, subnormals, the smallest and largest normals, both
         // signs, and many values of one exponent (more than a flush interval).
-        let mut v: std::vec::Vec<f32> = std::vec![
+        let mut v: std::vec::Vec<f32> = vec![
             0.0,
             -0.0,
             f32::from_bits(1),

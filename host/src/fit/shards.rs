@@ -11,8 +11,6 @@ use wire::{
 pub use block::{FitLabel, FitLogit};
 
 use std::path::Path;
-use std::string::{String, ToString};
-use std::vec::Vec;
 
 use super::bayes::{BayesCounters, BayesMoments};
 use super::stats::{BinCounter, ClassHistogram, ClassMoments};
@@ -201,7 +199,7 @@ impl FitStats {
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, FitError> {
         let w: StatsWire = decode(MAGIC_STATS, bytes)?;
         check_names(&w.classes, "statistics")?;
-        let bad = |what: &str| format_error(std::format!("inconsistent statistics: {what}"));
+        let bad = |what: &str| format_error(format!("inconsistent statistics: {what}"));
         let params = w.params.map(ParamsWire::into_params).transpose()?;
         if w.moments.len() != w.classes.len() {
             return Err(bad("one entry per class expected"));
@@ -297,7 +295,7 @@ impl FitEdges {
         check_names(&w.classes, "edges")?;
         let params = w.params.into_params()?;
         let k = w.classes.len();
-        let bad = |what: &str| format_error(std::format!("inconsistent edges: {what}"));
+        let bad = |what: &str| format_error(format!("inconsistent edges: {what}"));
         let axes = |ranges: &[(f32, f32)], bins| {
             if ranges.len() != k {
                 return Err(bad("one axis per class expected"));

@@ -1,8 +1,5 @@
 //! Per-class statistics of a fit: moments (pass 1) and histogram counts (pass 2).
 
-use std::string::String;
-use std::vec::Vec;
-
 use mlmap_core::{Axis, EdgeMode, VARIANCE_FLOOR};
 
 use super::binpicker;
@@ -318,7 +315,7 @@ impl BinCounter {
     pub(crate) fn from_axis(axis: Axis) -> Self {
         Self {
             shape: axis,
-            counts: std::vec![0; axis.bins()],
+            counts: vec![0; axis.bins()],
         }
     }
 
@@ -485,9 +482,9 @@ mod tests {
         let h = ClassHistogram {
             lo: 0.0,
             hi: 1.0,
-            counts: std::vec![1, 0, 3],
+            counts: vec![1, 0, 3],
         };
-        assert_eq!(h.frequencies(), std::vec![0.25, 0.0, 0.75]);
+        assert_eq!(h.frequencies(), vec![0.25, 0.0, 0.75]);
         assert_eq!(h.total(), 4);
     }
 }

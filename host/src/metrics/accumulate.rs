@@ -3,8 +3,6 @@
 //! `accuracy`), and optionally the average precision of each class (which keeps one
 //! sort key per row and class).
 
-use std::vec::Vec;
-
 use super::binning::{calibration, BinSum, CalibrationBin, Edges};
 use super::outcome::{outcome, Outcome};
 use super::ranking::{average_precision, pr_key, pr_points_of_keys};
@@ -152,7 +150,7 @@ impl Accumulator {
         let edges = Edges::new(cfg.binning, cfg.bins);
         let bins = parts
             .calibration
-            .then(|| std::vec![BinSum::default(); edges.len()]);
+            .then(|| vec![BinSum::default(); edges.len()]);
         Ok(Self {
             edges,
             bins,

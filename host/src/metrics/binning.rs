@@ -3,7 +3,6 @@
 
 use core::fmt;
 use core::str::FromStr;
-use std::vec::Vec;
 
 use super::accumulate::Sum;
 use super::MetricsError;
@@ -314,7 +313,7 @@ mod tests {
     fn names_parse() {
         assert_eq!("netcal".parse(), Ok(Binning::Netcal));
         assert_eq!("default".parse(), Ok(Binning::Design));
-        assert_eq!(std::format!("{}", Binning::Design), "design");
+        assert_eq!(format!("{}", Binning::Design), "design");
         assert_eq!(Binning::Design.flag(), "default");
         assert_eq!(
             "NetCal".parse::<Binning>(),

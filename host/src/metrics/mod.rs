@@ -33,8 +33,6 @@ mod ranking;
 mod stream;
 
 use core::fmt;
-use std::string::String;
-use std::vec::Vec;
 
 pub use self::accumulate::{Accumulator, Parts};
 pub use self::binning::{Binning, CalibrationBin};
@@ -244,8 +242,8 @@ impl Metrics {
             .collect();
         for (i, ap) in self.ap.iter().enumerate() {
             let key = match class_names.get(i) {
-                Some(name) => std::format!("ap_{}", name.as_ref()),
-                None => std::format!("ap_class{i}"),
+                Some(name) => format!("ap_{}", name.as_ref()),
+                None => format!("ap_class{i}"),
             };
             out.push((key, *ap));
         }

@@ -1,8 +1,6 @@
 //! What each row contributes: its confidence, its decision and whether it is correct
 //! (DESIGN §1.5), and the checks of the inputs.
 
-use std::vec::Vec;
-
 use super::MetricsError;
 
 /// What one row contributes to the confidence metrics.

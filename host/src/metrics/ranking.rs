@@ -1,8 +1,6 @@
 //! Ranking metrics (DESIGN §1.5): `auroc` of the confidence, true against false
 //! positives, and the precision-recall curve and average precision of each class.
 
-use std::vec::Vec;
-
 use super::accumulate::Sum;
 use super::outcome::{check, Outcome};
 use super::MetricsError;

@@ -1,8 +1,6 @@
 //! [`StreamMetrics`]: the metrics of one method over rows given in any number of pieces,
 //! in memory that does not grow with the rows, merged exactly across shards.
 
-use std::vec::Vec;
-
 use serde::{Deserialize, Serialize};
 
 use super::accumulate::AccumulatorWire;
@@ -155,8 +153,8 @@ impl StreamMetrics {
             acc: Accumulator::new(cfg, parts)?,
             tp: Moments::default(),
             fp: Moments::default(),
-            conf: std::vec![[0, 0]; levels as usize + 1],
-            classes: std::vec![std::vec![[0, 0]; levels as usize + 1]; k],
+            conf: vec![[0, 0]; levels as usize + 1],
+            classes: vec![vec![[0, 0]; levels as usize + 1]; k],
         })
     }
 
@@ -327,7 +325,7 @@ impl StreamMetrics {
         s.tp = w.tp;
         s.fp = w.fp;
         let read = |v: &[(u32, [u64; 2])]| -> Option<Counts> {
-            let mut c: Counts = std::vec![[0, 0]; w.levels as usize + 1];
+            let mut c: Counts = vec![[0, 0]; w.levels as usize + 1];
             let mut total = 0u64;
             // Levels strictly increasing, each inside.
             let mut next = 0u32;

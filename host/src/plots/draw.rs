@@ -1,13 +1,9 @@
 //! Rendering with plotters into an in-memory SVG document: one function per figure,
 //! and the colours every figure shares.
 
-use std::format;
 use std::io;
 use std::panic::{self, AssertUnwindSafe};
 use std::path::Path;
-use std::string::{String, ToString};
-use std::vec;
-use std::vec::Vec;
 
 use plotters::backend::SVGBackend;
 use plotters::chart::{ChartBuilder, ChartContext, SeriesLabelPosition, SeriesLabelStyle};

@@ -3,11 +3,6 @@
 //! the ECE, the curves' points and average precision come from
 //! [`metrics`](crate::metrics).
 
-use std::format;
-use std::string::{String, ToString};
-use std::vec;
-use std::vec::Vec;
-
 use super::SCORE_BINS;
 use crate::metrics::{average_precision, PrPoint};
 

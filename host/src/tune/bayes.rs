@@ -5,9 +5,6 @@
 //! backend (the head's default on the device) on a table holding exactly the head the
 //! candidate would write, so they are bit for bit the written table's.
 
-use std::format;
-use std::prelude::rust_2021::*;
-
 use super::{order, parallel, Candidate, HeadCandidates, Judge, TuneError, ValRows};
 use crate::fit::BayesCounts;
 use crate::DynTable;

@@ -1,9 +1,6 @@
 //! The grids a search walks: bin-count sets and log-spaced lambdas, bounded by
 //! [`MAX_CANDIDATES`].
 
-use std::format;
-use std::prelude::rust_2021::*;
-
 /// The most candidates (bin count and lambda pairs, over every head) one search
 /// builds: about eight times the default grid (DESIGN §4). A larger grid is refused
 /// before anything is read ([`TuneParams::check_size`](super::TuneParams::check_size)).

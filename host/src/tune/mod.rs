@@ -29,7 +29,6 @@ mod pipeline;
 mod recal;
 mod report;
 
-use std::prelude::rust_2021::*;
 use std::{format, vec};
 
 pub use self::bayes::{search_bayes, BayesSearchParams};

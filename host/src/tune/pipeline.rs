@@ -3,7 +3,6 @@
 //! baselines on the validation rows.
 
 use std::path::Path;
-use std::prelude::rust_2021::*;
 
 use super::{
     search, search_bayes, search_open, BayesSearchParams, Candidate, Guards, Judge, MapChoice,
@@ -85,9 +84,9 @@ impl TuneParams {
         let each: Vec<String> = heads
             .iter()
             .filter(|&&h| self.candidates(h) > 0)
-            .map(|&h| std::format!("{} {}", h.name(), self.candidates(h)))
+            .map(|&h| format!("{} {}", h.name(), self.candidates(h)))
             .collect();
-        Err(std::format!(
+        Err(format!(
             "the grid holds {total} candidates ({}: bin counts times lambdas); at most {} \
              are searched: give fewer bin counts or fewer lambdas per decade",
             each.join(", "),

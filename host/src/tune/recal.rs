@@ -3,9 +3,6 @@
 //! most [`MAX_KNOTS`](mlmap_core::MAX_KNOTS) knots, and kept only where it lowers the
 //! validation ECE out of sample (two folds) within the guards.
 
-use std::prelude::rust_2021::*;
-use std::vec;
-
 use super::{accumulate, Judge, ValRows};
 use crate::metrics::decision;
 use crate::DynTable;

@@ -9,8 +9,6 @@
 use std::fs::File;
 use std::io::{self, BufReader, Seek};
 use std::path::{Path, PathBuf};
-use std::string::{String, ToString};
-use std::vec::Vec;
 
 use npyz::{DType, Endianness, NpyHeader, Order, TypeChar};
 
@@ -266,7 +264,7 @@ impl Schema {
             return Err(DataError::new(
                 &logits_path,
                 DataErrorKind::NpyDtype {
-                    found: std::format!("{:?}", logits.elem).to_lowercase(),
+                    found: format!("{:?}", logits.elem).to_lowercase(),
                     expected: CODES,
                 },
             ));
@@ -383,7 +381,7 @@ impl Schema {
             let Some(&v) = chunk.xs.get(i * k + c) else {
                 return Err(cols.logits.missing(index));
             };
-            if let Err(kind) = super::check_logit(v, || std::format!("{v}")) {
+            if let Err(kind) = super::check_logit(v, || format!("{v}")) {
                 let e = at(&self.logits.path, kind);
                 return Err(e.in_column(classes.get(c).map_or("", String::as_str)));
             }
@@ -408,7 +406,7 @@ impl Schema {
                 None => return Err(col.missing(index)),
                 Some(&v) if (0.0..=1.0).contains(&v) => v,
                 Some(&v) => {
-                    let text = std::format!("{v}");
+                    let text = format!("{v}");
                     return Err(at(&col.array.path, DataErrorKind::ObjectnessRange { text }));
                 }
             },

@@ -3,7 +3,6 @@
 
 use std::fs::File;
 use std::io::{self, BufReader, Read};
-use std::vec::Vec;
 
 use super::{open_npy, Array, Elem};
 use crate::dataset::{DataError, DataErrorKind, Location};

@@ -4,8 +4,6 @@
 //! sums of `f32` logits in per-exponent integer buckets. The results are those of
 //! [`FitStats::push`] and [`FitCounts::push`] on the same rows, to the bit.
 
-use std::vec::Vec;
-
 use super::{FitCounts, FitStats};
 use crate::dataset::{DataError, DataErrorKind, Label, Location, Row};
 use crate::fit::exact::{F32Sums, F32_ROOM};
@@ -217,7 +215,7 @@ impl FitStats {
             return Ok(());
         }
         let mut sums: Vec<F32Sums> = if T::IS_F32 {
-            std::vec![F32Sums::default(); k]
+            vec![F32Sums::default(); k]
         } else {
             Vec::new()
         };

@@ -1,9 +1,6 @@
 //! The bytes of the statistics, edges and counts: `magic | version | postcard body |
 //! CRC-32`, each body a plain `...Wire` structure of numbers, strings and vectors.
 
-use std::string::{String, ToString};
-use std::vec::Vec;
-
 use serde::{Deserialize, Serialize};
 
 use super::{CRC, MAGIC_COUNTS, MAGIC_EDGES, MAGIC_STATS, STATS_FORMAT_VERSION};
@@ -17,10 +14,10 @@ use mlmap_core::{EdgeMode, UpperTail};
 pub(super) fn check_names(classes: &[String], what: &str) -> Result<(), FitError> {
     crate::dataset::check_class_names(classes, |i, kind| {
         let class = match classes.get(i) {
-            Some(name) => std::format!("class {i} ({name:?})"),
+            Some(name) => format!("class {i} ({name:?})"),
             None => "classes".to_string(),
         };
-        format_error(std::format!("{what} with an invalid {class}: {kind}"))
+        format_error(format!("{what} with an invalid {class}: {kind}"))
     })
     .map(|_| ())
 }
@@ -59,12 +56,12 @@ pub(super) fn decode<T: for<'de> Deserialize<'de>>(
     let head = bytes.get(..8);
     if head != Some(&magic[..]) {
         return Err(e(match head.and_then(kind) {
-            Some(found) => std::format!("these are {found}, not {want}"),
-            None if bytes.len() < 8 => std::format!(
+            Some(found) => format!("these are {found}, not {want}"),
+            None if bytes.len() < 8 => format!(
                 "{} bytes are too short to hold {want} (truncated?)",
                 bytes.len()
             ),
-            None => std::format!("not {want} of mlmap (unknown magic bytes)"),
+            None => format!("not {want} of mlmap (unknown magic bytes)"),
         }));
     }
     let version = match bytes.get(8..10) {
@@ -73,12 +70,12 @@ pub(super) fn decode<T: for<'de> Deserialize<'de>>(
     };
     if version != STATS_FORMAT_VERSION {
         return Err(e(if version > STATS_FORMAT_VERSION {
-            std::format!(
+            format!(
                 "format version {version} is newer than this build of mlmap reads \
                  ({STATS_FORMAT_VERSION}); use a newer mlmap"
             )
         } else {
-            std::format!("unknown format version {version}")
+            format!("unknown format version {version}")
         }));
     }
     let Some(split) = bytes.len().checked_sub(4).filter(|&n| n >= 10) else {
@@ -94,11 +91,8 @@ pub(super) fn decode<T: for<'de> Deserialize<'de>>(
     let body = data.get(10..).unwrap_or(&[]);
     match postcard::take_from_bytes::<T>(body) {
         Ok((value, [])) => Ok(value),
-        Ok((_, rest)) => Err(e(std::format!(
-            "{} unexpected bytes after the body",
-            rest.len()
-        ))),
-        Err(err) => Err(e(std::format!("the body cannot be decoded: {err}"))),
+        Ok((_, rest)) => Err(e(format!("{} unexpected bytes after the body", rest.len()))),
+        Err(err) => Err(e(format!("the body cannot be decoded: {err}"))),
     }
 }
 
