@@ -1,4 +1,5 @@
-//! CSV inputs, valid and malformed (each refused with its position), strict quoting, limits and pipes (DESIGN §2).
+//! CSV inputs, valid and malformed (each refused with its position), strict quoting,
+//! limits and pipes (DESIGN §2).
 
 use super::*;
 

@@ -137,9 +137,12 @@ fn write_raw_npy(path: &Path, descr: &str, shape: &str, data: &[u8]) {
     std::fs::write(path, bytes).unwrap();
 }
 
-/// CSV inputs, valid and malformed (each refused with its position), strict quoting, limits and pipes (DESIGN §2).
+/// CSV inputs, valid and malformed (each refused with its position), strict quoting,
+/// limits and pipes (DESIGN §2).
 mod csv;
-/// NPY directories written by numpy and npyz, labels of every integer dtype, every malformed directory.
+/// NPY directories written by numpy and npyz, labels of every integer dtype, every
+/// malformed directory.
 mod npy;
-/// NPY rows across the reader's chunks: errors in later chunks, exact labels, sizes that overflow.
+/// NPY rows across the reader's chunks: errors in later chunks, exact labels, sizes that
+/// overflow.
 mod npy_chunks;

@@ -1,4 +1,5 @@
-//! NPY directories written by numpy and npyz, labels of every integer dtype, every malformed directory.
+//! NPY directories written by numpy and npyz, labels of every integer dtype, every
+//! malformed directory.
 
 use super::*;
 

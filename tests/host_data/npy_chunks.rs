@@ -1,4 +1,5 @@
-//! NPY rows across the reader's chunks: errors in later chunks, exact labels, sizes that overflow.
+//! NPY rows across the reader's chunks: errors in later chunks, exact labels, sizes that
+//! overflow.
 
 use super::*;
 
