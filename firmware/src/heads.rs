@@ -4,6 +4,44 @@
 
 use super::*;
 
+/// `got`'s scores against the host's `want` (within `TOLERANCE`) and the head's own
+/// rule on them, as one check; the scores and the largest deviation, or `None` after
+/// reporting the error.
+fn scores_within(
+    r: &mut Report,
+    table: &str,
+    head: &str,
+    case: &Case<K>,
+    got: Result<Scores<K>, InferError>,
+    want: &[f64; K],
+    rule: impl Fn(&Scores<K>) -> bool,
+) -> Option<(Scores<K>, f64)> {
+    let got = match got {
+        Ok(s) => s,
+        Err(e) => {
+            r.check(
+                false,
+                case.label,
+                format_args!("{table} {head}: error {e:?}"),
+            );
+            return None;
+        }
+    };
+    let (mut max_err, mut within) = (0.0f64, true);
+    for (&g, &w) in got.0.iter().zip(want) {
+        let err = (f64::from(g) - w).abs();
+        max_err = max_err.max(err);
+        // A NaN score fails here (`max` would skip it).
+        within &= err <= TOLERANCE;
+    }
+    r.check(
+        within && rule(&got),
+        case.label,
+        format_args!("{table} {head}: got {:?}, want {:?}", got.0, want),
+    );
+    Some((got, max_err))
+}
+
 /// One head's scores against the host's values; returns the largest deviation.
 pub(crate) fn check_head(
     r: &mut Report,
@@ -13,39 +51,18 @@ pub(crate) fn check_head(
     got: Result<Scores<K>, InferError>,
     want: &Expect<K>,
 ) -> f64 {
-    let got = match got {
-        Ok(s) => s,
-        Err(e) => {
-            r.check(
-                false,
-                case.label,
-                format_args!("{table} {head}: error {e:?}"),
-            );
-            return 0.0;
-        }
-    };
-    let mut max_err = 0.0f64;
-    let mut scores_ok = true;
     #[allow(unused_mut)]
     let mut want_scores = want.scores;
     #[cfg(feature = "canary")]
     if case.label == CASES[0].label && head == "ML" {
         want_scores[0] += 1e-3;
     }
-    for (&g, &w) in got.0.iter().zip(want_scores.iter()) {
-        let err = (f64::from(g) - w).abs();
-        max_err = max_err.max(err);
-        scores_ok &= err <= TOLERANCE;
-    }
-    if want.uniform {
-        let share = case.objectness / K as f32;
-        scores_ok &= got.0.iter().all(|&g| g.to_bits() == share.to_bits());
-    }
-    r.check(
-        scores_ok,
-        case.label,
-        format_args!("{table} {head}: got {:?}, want {:?}", got.0, want_scores),
-    );
+    // "I don't know": exactly OS / K each.
+    let share = case.objectness / K as f32;
+    let rule = |s: &Scores<K>| !want.uniform || s.0.iter().all(|g| g.to_bits() == share.to_bits());
+    let Some((got, max_err)) = scores_within(r, table, head, case, got, &want_scores, rule) else {
+        return 0.0;
+    };
     if let Some(class) = want.argmax {
         r.check(
             got.argmax() == class,
@@ -70,39 +87,21 @@ pub(crate) fn check_open(
     got: Result<Scores<K>, InferError>,
     want: &OpenExpect<K>,
 ) -> f64 {
-    let got = match got {
-        Ok(s) => s,
-        Err(e) => {
-            r.check(
-                false,
-                case.label,
-                format_args!("{table} {head}: error {e:?}"),
-            );
-            return 0.0;
-        }
-    };
-    let mut max_err = 0.0f64;
-    let mut sum = 0.0f64;
-    let mut scores_ok = true;
     #[allow(unused_mut)]
     let mut want_scores = want.scores;
     #[cfg(feature = "canary")]
     if case.label == SMALL_CASES[0].label && head == "open" {
         want_scores[1] += 1e-3;
     }
-    for (&g, &w) in got.0.iter().zip(want_scores.iter()) {
-        let err = (f64::from(g) - w).abs();
-        max_err = max_err.max(err);
-        sum += f64::from(g);
-        // Every score in [0, OS] (DESIGN §1.8), and the host's value.
-        scores_ok &= err <= TOLERANCE && (0.0..=case.objectness).contains(&g);
-    }
-    scores_ok &= sum <= f64::from(case.objectness) * (1.0 + 1e-5);
-    r.check(
-        scores_ok,
-        case.label,
-        format_args!("{table} {head}: got {:?}, want {:?}", got.0, want_scores),
-    );
+    // Every score in [0, OS], summing to at most OS (DESIGN §1.8).
+    let os = case.objectness;
+    let rule = |s: &Scores<K>| {
+        let sum: f64 = s.0.iter().map(|&g| f64::from(g)).sum();
+        s.0.iter().all(|g| (0.0..=os).contains(g)) && sum <= f64::from(os) * (1.0 + 1e-5)
+    };
+    let Some((got, max_err)) = scores_within(r, table, head, case, got, &want_scores, rule) else {
+        return 0.0;
+    };
     let decided = got.decide(&case.logits);
     r.check(
         decided == want.decision,
