@@ -8,7 +8,7 @@ use mlmap::{
 };
 use proptest::prelude::*;
 
-use crate::support::GOLDEN_ABS_TOL;
+use crate::support::{crc32, GOLDEN_ABS_TOL};
 
 /// The small table with a Bayes head, the open head and a map for every head.
 const SMALL_MAPS: &[u8] = include_bytes!("golden/layer/small_maps.mlmap");
@@ -271,22 +271,6 @@ fn with_open_knots(knots: [(f32, f32); 3]) -> Vec<u8> {
     let crc = crc32(&b);
     b.extend_from_slice(&crc.to_le_bytes());
     b
-}
-
-/// zlib's CRC-32, bit by bit (independent of the crate's).
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = 0xFFFF_FFFFu32;
-    for &byte in data {
-        crc ^= u32::from(byte);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 #[test]

@@ -182,9 +182,29 @@ pub fn goldens(csv: &str) -> Vec<Golden> {
     rows
 }
 
-/// CRC-32/ISO-HDLC (zlib's `crc32`), the checksum of the format.
+/// CRC-32/ISO-HDLC (zlib's `crc32`), the checksum of the format and its sections,
+/// computed bit by bit: independent of the table-driven one the library uses.
 pub fn crc32(bytes: &[u8]) -> u32 {
-    crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(bytes)
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// A section (or table) with `bytes` written at `at` and its last four bytes, the
+/// CRC-32 of everything before them, made right again.
+pub fn resealed(section: &[u8], at: usize, bytes: &[u8]) -> Vec<u8> {
+    let mut s = section.to_vec();
+    s[at..at + bytes.len()].copy_from_slice(bytes);
+    fix_crc(&s)
 }
 
 /// `payload` followed by its CRC-32, little-endian: a file whose checksum is right.

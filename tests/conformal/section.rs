@@ -2,6 +2,7 @@
 //! bytes, and the errors of the sets.
 
 use super::*;
+use crate::support::resealed;
 
 #[test]
 fn the_section_keeps_the_table_and_the_other_sections() {
@@ -40,32 +41,6 @@ fn the_section_keeps_the_table_and_the_other_sections() {
     // The section alone reads against the table by shape.
     let alone = section_of(&with_both, CONFORMAL_MAGIC).unwrap();
     ConformalSpec::from_bytes(alone, &table.view()).unwrap();
-}
-
-/// A section with one field changed and its CRC made right again.
-fn resealed(section: &[u8], at: usize, bytes: &[u8]) -> Vec<u8> {
-    let mut s = section.to_vec();
-    s[at..at + bytes.len()].copy_from_slice(bytes);
-    let n = s.len();
-    let crc = crc32(&s[..n - 4]);
-    s[n - 4..].copy_from_slice(&crc.to_le_bytes());
-    s
-}
-
-fn crc32(bytes: &[u8]) -> u32 {
-    // CRC-32 (IEEE), bit by bit: independent of the crate's table-driven one.
-    let mut crc = !0u32;
-    for &b in bytes {
-        crc ^= u32::from(b);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 {
-                (crc >> 1) ^ 0xedb8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 #[test]

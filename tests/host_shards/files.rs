@@ -132,7 +132,7 @@ fn counts_over_other_edges_are_refused() {
 fn with_version(bytes: &[u8], version: u16) -> Vec<u8> {
     let mut b = bytes[..bytes.len() - 4].to_vec();
     b[8..10].copy_from_slice(&version.to_le_bytes());
-    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&b);
+    let crc = crate::support::crc32(&b);
     b.extend_from_slice(&crc.to_le_bytes());
     b
 }
@@ -192,7 +192,7 @@ fn serialized_statistics_round_trip_and_bad_bytes_are_refused() {
     // Trailing bytes (with a valid checksum) are refused too.
     let mut long = bytes[..bytes.len() - 4].to_vec();
     long.push(0);
-    let crc = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC).checksum(&long);
+    let crc = crate::support::crc32(&long);
     long.extend_from_slice(&crc.to_le_bytes());
     let m = msg(FitStats::from_bytes(&long));
     assert!(m.contains("unexpected bytes"), "{m}");
