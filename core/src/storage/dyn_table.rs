@@ -135,7 +135,7 @@ pub struct BayesSpec {
     pub rows: Vec<u64>,
     /// First and last edge of each logit's bins (K pairs).
     pub ranges: Vec<(f32, f32)>,
-    /// `ln(h + lambda)` per logit, bin and category, logit-major (see [`BayesView`]).
+    /// `ln(h + lambda)` per logit, bin and category, logit-major (see [`BayesView`](crate::BayesView)).
     pub terms: Vec<f32>,
     /// The objectness feature (DESIGN §1.6), when fitted: the first and last edge of
     /// its axis over the objectness logit, and its `ln(h + lambda)` per bin and
