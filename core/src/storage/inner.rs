@@ -246,13 +246,13 @@ pub(crate) struct Parts<'a, F, G> {
     pub(crate) lambda: f32,
     pub(crate) log_lambda: f32,
     pub(crate) open: Option<OpenParams>,
-    pub(crate) recal: [&'a [Knot]; 4],
-    pub(crate) recal_len: [u8; 4],
+    /// The heads' maps ([`maps_of`]).
+    pub(crate) maps: Maps<'a>,
     pub(crate) os_axis: &'a [Axis],
     pub(crate) os_terms: &'a [f32],
 }
 
-/// The view of the parts `p` of which `u` is in use: the one construction of a
+/// The view of the parts `p` of which `u` is in use (`p.maps` already cut to it): the one construction of a
 /// [`TableView`], for every storage.
 #[inline(always)]
 pub(crate) fn view_of<'a, F, G>(p: Parts<'a, F, G>, u: InUse) -> TableView<'a, F, G> {
@@ -280,15 +280,25 @@ pub(crate) fn view_of<'a, F, G>(p: Parts<'a, F, G>, u: InUse) -> TableView<'a, F
             },
         }),
         settings: p.settings,
-        maps: if u.maps {
-            Maps(core::array::from_fn(|h| {
-                let len = p.recal_len.get(h).map_or(0, |&n| usize::from(n));
-                p.recal.get(h).map_or(&[][..], |k| first(k, len))
-            }))
-        } else {
-            Maps::NONE
-        },
+        maps: p.maps,
     }
+}
+
+/// The maps of a table: the first `len[h]` knots of `knots(h)` for each head, when the
+/// storage has room for maps (`any`; none otherwise, known at compile time for arrays).
+#[inline(always)]
+pub(crate) fn maps_of<'a>(
+    any: bool,
+    len: &[u8; 4],
+    knots: impl Fn(usize) -> Option<&'a [Knot]>,
+) -> Maps<'a> {
+    if !any {
+        return Maps::NONE;
+    }
+    Maps(core::array::from_fn(|h| {
+        let len = len.get(h).map_or(0, |&n| usize::from(n));
+        knots(h).and_then(|k| k.get(..len)).unwrap_or_default()
+    }))
 }
 
 impl<S: Storage> TableInner<S> {
@@ -303,7 +313,7 @@ impl<S: Storage> TableInner<S> {
     /// The table in use as a [`TableView`] (no classes for an empty bounded table).
     #[inline(always)]
     pub(crate) fn in_use_view(&self) -> TableView<'_, S::MlFreqs, S::MapFreqs> {
-        let [r0, r1, r2, r3] = &self.recal;
+        let in_use = S::in_use(self);
         view_of(
             Parts {
                 names: self.names.items(),
@@ -319,12 +329,13 @@ impl<S: Storage> TableInner<S> {
                 lambda: self.bayes_lambda,
                 log_lambda: self.bayes_log_lambda,
                 open: self.bayes_open,
-                recal: [r0.items(), r1.items(), r2.items(), r3.items()],
-                recal_len: self.recal_len,
                 os_axis: self.bayes_os_axis.items(),
                 os_terms: self.bayes_os_terms.items(),
+                maps: maps_of(in_use.maps, &self.recal_len, |h| {
+                    self.recal.get(h).map(Items::items)
+                }),
             },
-            S::in_use(self),
+            in_use,
         )
     }
 

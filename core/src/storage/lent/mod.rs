@@ -19,7 +19,7 @@ use crate::format::wire::Settings;
 use crate::heads::recal::Knot;
 use crate::math::gaussian::Gaussian;
 use crate::math::histogram::{Axis, Histogram};
-use crate::storage::inner::{private::Sealed, view_of, InUse, Parts, Storage, TableInner};
+use crate::storage::inner::{maps_of, private::Sealed, view_of, InUse, Parts, Storage, TableInner};
 use crate::storage::view::TableView;
 
 mod arena;
@@ -281,7 +281,7 @@ impl<'t> LentTable<'t> {
     ) -> Result<TableView<'t, &'t mut [f32], &'t mut [f32]>, DecodeError> {
         self.decode_with(bytes, |_| (scratch_names, scratch_lens))?;
         let in_use = LentStorage::in_use(&self);
-        let [r0, r1, r2, r3] = self.recal;
+        let recal: [&'t [Knot]; 4] = self.recal.map(|k| &*k);
         let parts = Parts {
             names: self.names,
             rows: self.rows,
@@ -296,10 +296,9 @@ impl<'t> LentTable<'t> {
             lambda: self.bayes_lambda,
             log_lambda: self.bayes_log_lambda,
             open: self.bayes_open,
-            recal: [r0, r1, r2, r3],
-            recal_len: self.recal_len,
             os_axis: self.bayes_os_axis,
             os_terms: self.bayes_os_terms,
+            maps: maps_of(in_use.maps, &self.recal_len, |h| recal.get(h).copied()),
         };
         Ok(view_of(parts, in_use))
     }
