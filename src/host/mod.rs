@@ -10,7 +10,7 @@
 //! [`tune::tune`]), so they can be called without the binary.
 
 pub use self::error::HostError;
-pub use mlmap_core::{BayesSpec, DynQTable, DynTable};
+pub use mlmap_core::{BayesSpec, DynQTable, DynTable, VecStorage};
 
 pub mod baselines;
 pub mod conformal;
