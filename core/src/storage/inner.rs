@@ -569,3 +569,77 @@ impl<S: Storage> TableInner<S> {
             .open_into::<M>(logits, objectness, out, scratch)
     }
 }
+
+#[cfg(all(test, feature = "alloc"))]
+mod tests {
+    use super::*;
+    use crate::heads::recal::HEADS;
+    use crate::{BoundedTable, DynTable, Table, MAX_KNOTS};
+    use std::boxed::Box;
+    use std::vec::Vec;
+
+    const SHIPPED: &[u8] = include_bytes!("../../../tables/default.mlmap");
+    const SMALL: &[u8] = include_bytes!("../../../tests/golden/layer/small.mlmap");
+    const SMALL_MAPS: &[u8] = include_bytes!("../../../tests/golden/layer/small_maps.mlmap");
+    const SMALL_OSF: &[u8] = include_bytes!("../../../tests/golden/layer/small_osf.mlmap");
+    const SMALL_OPEN: &[u8] = include_bytes!("../../../tests/golden/layer/small_open.mlmap");
+
+    type Big = BoundedTable<16, 64, 64, 64, 17, MAX_KNOTS, 1>;
+
+    fn hists<F: AsRef<[f32]>>(h: &[Histogram<F>]) -> Vec<(f32, f32, f32, f32, Vec<f32>)> {
+        h.iter()
+            .map(|h| (h.lo, h.hi, h.width, h.inv_width, h.freqs.as_ref().to_vec()))
+            .collect()
+    }
+
+    /// Every accessor of `a` answers as `b`'s does.
+    fn same<S: Storage, T: Storage>(a: &TableInner<S>, b: &TableInner<T>) {
+        assert_eq!(
+            (a.k(), a.bins_ml(), a.bins_map()),
+            (b.k(), b.bins_ml(), b.bins_map())
+        );
+        assert_eq!(
+            a.class_names().collect::<Vec<_>>(),
+            b.class_names().collect::<Vec<_>>()
+        );
+        for i in 0..=a.k() {
+            assert_eq!(a.class_name(i), b.class_name(i));
+            assert_eq!(a.spec(i), b.spec(i));
+        }
+        assert_eq!(a.class_index("car"), b.class_index("car"));
+        assert_eq!(a.settings(), b.settings());
+        assert_eq!(a.rows(), b.rows());
+        assert_eq!(a.priors(), b.priors());
+        assert_eq!(hists(a.ml_histograms()), hists(b.ml_histograms()));
+        assert_eq!(hists(a.map_histograms()), hists(b.map_histograms()));
+        assert_eq!(a.bayes_head(), b.bayes_head());
+        assert_eq!(a.open_params(), b.open_params());
+        for head in HEADS {
+            assert_eq!(a.recal_map(head), b.recal_map(head));
+        }
+        assert_eq!(a.encoded_len(), b.encoded_len());
+    }
+
+    /// The accessors of every storage agree, table by table, with the run-time shaped
+    /// one's; an empty bounded table has none.
+    #[test]
+    fn every_storage_answers_alike() {
+        let mut bounded = Box::new(Big::new());
+        assert_eq!((bounded.k(), bounded.rows().len()), (0, 0));
+        assert!(bounded.bayes_head().is_none() && bounded.class_name(0).is_none());
+        for bytes in [SHIPPED, SMALL, SMALL_MAPS, SMALL_OSF, SMALL_OPEN] {
+            let d = DynTable::from_bytes(bytes).unwrap();
+            bounded.decode(bytes).unwrap();
+            same(&d, &*bounded);
+            assert_eq!(d.encoded_len(), bytes.len());
+        }
+        let shipped = Table::<3, 22, 17, 22, 4>::from_bytes(SHIPPED).unwrap();
+        same(&shipped, &DynTable::from_bytes(SHIPPED).unwrap());
+        let small = Table::<3, 4, 2>::from_bytes(SMALL).unwrap();
+        same(&small, &DynTable::from_bytes(SMALL).unwrap());
+        let maps = Table::<3, 4, 2, 4, 4, MAX_KNOTS>::from_bytes(SMALL_MAPS).unwrap();
+        same(&maps, &DynTable::from_bytes(SMALL_MAPS).unwrap());
+        // A copy of a fixed-size table is the same table.
+        same(&DynTable::from_table(&maps), &maps);
+    }
+}
