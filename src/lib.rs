@@ -72,13 +72,14 @@ pub use mlmap_core::baseline;
 pub use mlmap_core::lidar;
 pub use mlmap_core::{
     argmax, check_class_name, check_class_names, decide, locate_malformed, objectness_logit,
-    refused_char, scores_from_evidence, Axis, Backend, BatchError, BayesBackend, BayesView,
-    BodyPart, Bounded, BoundedTable, CharKind, ClassName, ClassSpec, DecodeError, EdgeMode,
-    EncodeError, Gaussian, GaussianError, Head, Histogram, HistogramError, InferError, Knot, Libm,
-    MapBackend, MapError, NameError, OpenBackend, OpenParams, RecalMap, Scores, Settings, Table,
-    TableError, TableView, UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON,
-    MAX_KNOTS, MAX_LAMBDA, MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX,
-    NAME_RULE_VERSION, VARIANCE_FLOOR,
+    refused_char, scores_from_evidence, ArrayStorage, Axis, Backend, BatchError, BayesBackend,
+    BayesView, BodyPart, Bounded, BoundedExtent, BoundedStorage, BoundedTable, CharKind, ClassName,
+    ClassSpec, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError, Head, Histogram,
+    HistogramError, InferError, Items, Knot, Libm, MapBackend, MapError, NameError, OpenBackend,
+    OpenParams, RecalMap, Scores, Settings, Storage, Table, TableError, TableInner, TableView,
+    UpperTail, FORMAT_VERSION, FREQUENCY_SUM_TOLERANCE, MAGIC, MAX_EPSILON, MAX_KNOTS, MAX_LAMBDA,
+    MAX_LAMBDA_BAYES, MAX_TEMPERATURE, MIN_TEMPERATURE, NAME_MAX, NAME_RULE_VERSION,
+    VARIANCE_FLOOR,
 };
 
 pub mod embedded;

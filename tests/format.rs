@@ -56,7 +56,7 @@ fn round_trip_is_exact() {
     let back = Small::from_bytes(&bytes).unwrap();
     assert_eq!(back, t);
     assert_eq!(encode(&back), bytes);
-    assert_eq!(back.rows(0), Some(u64::MAX));
+    assert_eq!(back.rows().first(), Some(&u64::MAX));
     assert_eq!(back.settings().lambda_map.to_bits(), 1);
 }
 
@@ -791,7 +791,7 @@ fn v1_files_still_decode_without_a_bayes_head() {
     #[cfg(feature = "std")]
     {
         let d = mlmap::host::DynTable::from_bytes(v1).unwrap();
-        assert!(d.bayes().is_none());
+        assert!(d.bayes_head().is_none());
         assert_eq!(d.to_vec().unwrap(), v1);
         // Dropping the head of the shipped table gives the version-1 file back.
         let without = mlmap::host::DynTable::from_bytes(SHIPPED_MLMAP)

@@ -74,7 +74,7 @@ fn default_fit_with_the_bayes_head_equals_the_numpy_reference_byte_for_byte() {
     let set = TrainingSet::read(&train()).unwrap();
     assert_eq!(set.fit(&params).unwrap(), table);
     // Background rows make a fourth category; its prior is their share of the rows.
-    let bayes = table.bayes().unwrap();
+    let bayes = table.bayes_head().unwrap();
     assert_eq!(bayes.all_rows(), [11159, 1668, 3173, 4000]);
     assert_eq!((bayes.bins(), bayes.lambda()), (22, 1e-3));
     // Without the Bayes head, the same fit is the version-1 golden table.
@@ -99,7 +99,7 @@ fn objectness_feature_fit_equals_the_numpy_reference_byte_for_byte() {
     assert_eq!(table.to_vec().unwrap(), golden);
     let set = TrainingSet::read(&train()).unwrap();
     assert_eq!(set.fit(&params).unwrap(), table);
-    let bayes = table.bayes().unwrap();
+    let bayes = table.bayes_head().unwrap();
     assert_eq!(bayes.features(), 4);
     assert_eq!(bayes.objectness_terms().len(), 22 * 4);
     // Statistics do not hold the objectness: the feature needs the rows.
@@ -233,8 +233,8 @@ fn background_and_unlabelled_rows_are_not_used() {
             fit(&with_fp, &params).unwrap(),
         );
         assert_eq!(a.clone().without_bayes(), b.clone().without_bayes());
-        assert_eq!(a.bayes().unwrap().all_rows(), [3, 2]);
-        assert_eq!(b.bayes().unwrap().all_rows(), [3, 2, 2]);
+        assert_eq!(a.bayes_head().unwrap().all_rows(), [3, 2]);
+        assert_eq!(b.bayes_head().unwrap().all_rows(), [3, 2, 2]);
     }
 }
 

@@ -249,10 +249,10 @@ fn resolve<const K: usize, const BM: usize, const BP: usize>(
 ) -> f32 {
     let range = |ml: bool| {
         if ml {
-            let h = t.ml_histogram(class).unwrap();
+            let h = t.ml_histograms().get(class).unwrap();
             (h.lo(), h.hi(), h.bins())
         } else {
-            let h = t.map_histogram(class).unwrap();
+            let h = t.map_histograms().get(class).unwrap();
             (h.lo(), h.hi(), h.bins())
         }
     };
@@ -265,13 +265,13 @@ fn resolve<const K: usize, const BM: usize, const BP: usize>(
             let (_, _, bins) = range(ml);
             let k = k % (bins + 1);
             if ml {
-                t.ml_histogram(class).unwrap().edge(k)
+                t.ml_histograms().get(class).unwrap().edge(k)
             } else {
-                t.map_histogram(class).unwrap().edge(k)
+                t.map_histograms().get(class).unwrap().edge(k)
             }
         }
         Logit::Prior(z) => {
-            let g = t.prior(class).unwrap();
+            let g = t.priors().get(class).unwrap();
             (f64::from(g.mean()) + z * f64::from(g.variance()).sqrt()) as f32
         }
         Logit::Raw(v) => v,
@@ -357,7 +357,10 @@ fn outside<const K: usize, const BM: usize, const BP: usize>(
     pick: u8,
     u: f32,
 ) -> f32 {
-    let (ml, map) = (t.ml_histogram(c).unwrap(), t.map_histogram(c).unwrap());
+    let (ml, map) = (
+        t.ml_histograms().get(c).unwrap(),
+        t.map_histograms().get(c).unwrap(),
+    );
     let lo = ml.lo().min(map.lo());
     let hi = ml.hi().max(map.hi());
     let below = (lo - (hi - lo) * u).min(lo.next_down());
@@ -400,7 +403,7 @@ fn ml_score_follows_likelihood<const K: usize, const BM: usize, const BP: usize>
     os: f32,
 ) -> Result<(), TestCaseError> {
     let tail = t.settings().upper_tail;
-    let h = t.ml_histogram(i).unwrap();
+    let h = t.ml_histograms().get(i).unwrap();
     let (mut xa, mut xb) = (*x, *x);
     xb[i] = alt;
     let (la, lb) = (h.likelihood(xa[i], tail), h.likelihood(xb[i], tail));
@@ -461,9 +464,9 @@ fn raised_bin_never_lowers_score<const K: usize, const BM: usize, const BP: usiz
     };
     let mut x = *x;
     x[i] = if ml_head {
-        t.ml_histogram(i).unwrap().edge(k)
+        t.ml_histograms().get(i).unwrap().edge(k)
     } else {
-        t.map_histogram(i).unwrap().edge(k)
+        t.map_histograms().get(i).unwrap().edge(k)
     };
     let (before, after) = if ml_head {
         (t.ml(&x, os).unwrap(), t2.ml(&x, os).unwrap())
@@ -1085,7 +1088,7 @@ pub(crate) mod bayes {
         x: &[f32],
         os: f32,
     ) -> Result<Result<Vec<f32>, InferError>, TestCaseError> {
-        let head = d.bayes().expect("the table has a Bayes head");
+        let head = d.bayes_head().expect("the table has a Bayes head");
         let (k, cats) = (head.logits(), head.categories());
         let ctx = || format!("x = {x:?}, OS = {os:e}, lambda = {:e}", head.lambda());
         let mut fast = vec![0.0f32; k];
@@ -1172,7 +1175,7 @@ pub(crate) mod bayes {
         ) {
             prop_assert_eq!(d.k(), k);
             holds(check_dyn_table(&d), || format!("{b:?}"))?;
-            let head = d.bayes().unwrap();
+            let head = d.bayes_head().unwrap();
             prop_assert_eq!(head.bins(), bins);
             prop_assert_eq!(head.has_background(), background);
             let x = resolve_all(&head, &recipe);
@@ -1330,8 +1333,8 @@ pub(crate) mod bayes {
         x: &[f32],
         os: f32,
     ) -> Result<Result<Vec<f32>, InferError>, TestCaseError> {
-        let head = d.bayes().expect("the table has a Bayes head");
-        let params = d.open().expect("the table has the open head");
+        let head = d.bayes_head().expect("the table has a Bayes head");
+        let params = d.open_params().expect("the table has the open head");
         let (k, cats) = (head.logits(), head.categories());
         let ctx = || format!("x = {x:?}, OS = {os:e}, {params:?}");
         let mut fast = vec![0.0f32; k];
@@ -1387,7 +1390,7 @@ pub(crate) mod bayes {
             let bytes = d.to_vec().unwrap();
             prop_assert_eq!(bytes[4], 3);
             prop_assert_eq!(&DynTable::from_bytes(&bytes).unwrap(), &d);
-            let head = d.bayes().unwrap();
+            let head = d.bayes_head().unwrap();
             prop_assert_eq!((head.logits(), head.bins(), head.has_background()), (k, bins, background));
             let x = resolve_all(&head, &recipe);
             prop_assert!(open_detection(&d, &x, os)?.is_ok());
@@ -1413,7 +1416,7 @@ pub(crate) mod bayes {
             let (lo, hi) = if e1 <= e2 { (e1, e2) } else { (e2, e1) };
             let low = d.clone().with_open(t, lo).unwrap();
             let high = d.clone().with_open(t, hi).unwrap();
-            let head = d.bayes().unwrap();
+            let head = d.bayes_head().unwrap();
             let x = resolve_all(&head, &recipe);
             let cats = head.categories();
             let (mut a, mut b, mut scratch) = (vec![0.0f32; k], vec![0.0f32; k], vec![0.0f32; cats]);

@@ -579,12 +579,14 @@ fn out_of_support_is_exactly_os_over_k() {
         ];
         // Just outside each class's widest support, below and above.
         let below: [f32; 3] = std::array::from_fn(|i| {
-            let lo = shipped.ml_histogram(i).unwrap().lo();
-            lo.min(shipped.map_histogram(i).unwrap().lo()).next_down()
+            let lo = shipped.ml_histograms().get(i).unwrap().lo();
+            lo.min(shipped.map_histograms().get(i).unwrap().lo())
+                .next_down()
         });
         let above: [f32; 3] = std::array::from_fn(|i| {
-            let hi = shipped.ml_histogram(i).unwrap().hi();
-            hi.max(shipped.map_histogram(i).unwrap().hi()).next_up()
+            let hi = shipped.ml_histograms().get(i).unwrap().hi();
+            hi.max(shipped.map_histograms().get(i).unwrap().hi())
+                .next_up()
         });
         v.push(below);
         v.push(above);
@@ -856,7 +858,7 @@ mod dyn_table {
         }
         // A table without the head says so.
         let v1 = DynTable::from_bytes(crate::support::SMALL_MLMAP).unwrap();
-        assert!(v1.bayes().is_none());
+        assert!(v1.bayes_head().is_none());
         assert_eq!(
             v1.bayes_into::<Libm>(&[0.0; 3], 1.0, &mut out, &mut scratch),
             Err(InferError::NoBayesHead)
@@ -891,7 +893,7 @@ mod fast_math {
     /// `steps` points per bin across every MAP bin of class `c`, a margin of two bins on
     /// each side, and every edge itself.
     fn grid(t: &Shipped, c: usize, steps: usize) -> Vec<f32> {
-        let h = t.map_histogram(c).unwrap();
+        let h = t.map_histograms().get(c).unwrap();
         let w = (h.hi() - h.lo()) / h.bins() as f32;
         let n = (h.bins() + 4) * steps;
         let mut v: Vec<f32> = (0..=n)
@@ -919,7 +921,7 @@ mod fast_math {
         let fine: Vec<Vec<f32>> = (0..3).map(|c| grid(t, c, 12)).collect();
         let coarse: Vec<Vec<f32>> = (0..3)
             .map(|c| {
-                let h = t.map_histogram(c).unwrap();
+                let h = t.map_histograms().get(c).unwrap();
                 let mut v: Vec<f32> = (0..h.bins())
                     .map(|k| 0.5 * (h.edge(k) + h.edge(k + 1)))
                     .collect();
@@ -944,7 +946,7 @@ mod fast_math {
         // Random vectors over the union of the supports.
         let mut rng = Rng(0x5eed_1234_abcd_0001);
         let (lo, hi) = (0..3).fold((f32::MAX, f32::MIN), |(lo, hi), c| {
-            let h = t.map_histogram(c).unwrap();
+            let h = t.map_histograms().get(c).unwrap();
             (lo.min(h.lo()), hi.max(h.hi()))
         });
         for _ in 0..50_000 {

@@ -441,7 +441,7 @@ fn objectness_feature_types_and_bytes() {
     assert_eq!(t.to_slice(&mut buf).unwrap(), SMALL_OSF);
     let d = mlmap::host::DynTable::from_bytes(SMALL_OSF).unwrap();
     assert_eq!(d.to_vec().unwrap(), SMALL_OSF);
-    let b = d.bayes().unwrap();
+    let b = d.bayes_head().unwrap();
     assert_eq!(b.features(), 4);
     let axis = b.objectness_axis().unwrap();
     assert_eq!((axis.lo(), axis.hi(), axis.bins()), (-4.0, 4.0, 4));

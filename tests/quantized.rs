@@ -556,9 +556,9 @@ fn shipped_int8_section_size() {
     let mut size = 32 + 8;
     for c in 0..3 {
         let x = |q: i32| dequantize(q, scales[c], zps[c]);
-        let ml = t.ml_histogram(c).unwrap();
-        let map = t.map_histogram(c).unwrap();
-        let g = t.prior(c).unwrap();
+        let ml = t.ml_histograms().get(c).unwrap();
+        let map = t.map_histograms().get(c).unwrap();
+        let g = t.priors().get(c).unwrap();
         let (lm, lp) = (t.settings().lambda_ml, t.settings().lambda_map);
         let n_ml = window(&|q| ml.bin(x(q)).is_some_and(|b| ml.frequencies()[b] + lm != lm));
         let n_map = window(&|q| {
@@ -630,8 +630,8 @@ fn open_record_layout() {
         assert_eq!(v1[20..body], v2[20..body]);
         // The unknown's log-score: ln(0.05) + 3 ln(1/4 + lambda) in f64 (the table's
         // f32 value within a few rounding steps).
-        let lambda = f64::from(with.bayes().unwrap().lambda());
-        let log_unknown = with.open().unwrap().log_unknown();
+        let lambda = f64::from(with.bayes_head().unwrap().lambda());
+        let log_unknown = with.open_params().unwrap().log_unknown();
         let want = 0.05f64.ln() + 3.0 * (0.25 + lambda).ln();
         assert!(
             (f64::from(log_unknown) - want).abs() < 1e-5,
@@ -652,7 +652,7 @@ fn open_record_layout() {
             mlmap::host::DynQTable::from_bytes(&v2).unwrap(),
         );
         assert_eq!(q1.open_params(), None);
-        assert_eq!(open_bits(q2.open_params()), open_bits(with.open()));
+        assert_eq!(open_bits(q2.open_params()), open_bits(with.open_params()));
         let mut out = [0.0f32; 3];
         assert_eq!(
             q1.score_i32_into(mlmap::Head::Open, &[0, 1, 2], 1.0, &mut out, &mut [0.0; 7]),
@@ -1175,7 +1175,7 @@ mod random {
         let x: Vec<f32> = (0..k)
             .map(|i| dequantize(codes[i], scales[i], zps[i]))
             .collect();
-        let heads: &[Head] = match (t.bayes().is_some(), t.open().is_some()) {
+        let heads: &[Head] = match (t.bayes_head().is_some(), t.open_params().is_some()) {
             (true, true) => &[Head::Ml, Head::Map, Head::Bayes, Head::Open],
             (true, false) => &[Head::Ml, Head::Map, Head::Bayes],
             _ => &[Head::Ml, Head::Map],
@@ -1193,7 +1193,7 @@ mod random {
                     want.iter().map(|v| v.to_bits()).collect(),
                 );
                 prop_assert_eq!(g, w, "{:?} codes {:?} x {:?}", head, codes, x);
-                let background = t.bayes().is_some_and(|b| b.has_background());
+                let background = t.bayes_head().is_some_and(|b| b.has_background());
                 let sum = match head {
                     Head::Open => Sum::AtMost,
                     Head::Bayes if background => Sum::AtMost,
@@ -1253,8 +1253,8 @@ mod random {
             let bytes = quantize_into(&t.view(), &p, &mut buf).unwrap();
             let q = DynQTable::from_bytes(bytes).unwrap();
             prop_assert_eq!(q.k(), k);
-            prop_assert_eq!(open_bits(q.open_params()), open_bits(t.open()));
-            prop_assert_eq!(bytes[4], if t.open().is_some() { 2 } else { 1 });
+            prop_assert_eq!(open_bits(q.open_params()), open_bits(t.open_params()));
+            prop_assert_eq!(bytes[4], if t.open_params().is_some() { 2 } else { 1 });
             let (lo, hi) = mlmap::code_range(bits);
             let mut state = code_seed | 1;
             let mut next = move || { state ^= state << 13; state ^= state >> 7; state ^= state << 17; state };

@@ -90,8 +90,9 @@ pub use sections::monitor::{
     MONITOR_MAGIC, MONITOR_VERSION, REFERENCE_SUM_TOLERANCE,
 };
 pub use sections::{section_of, table_of};
-pub use storage::bounded::{Bounded, BoundedTable};
-pub use storage::table::Table;
+pub use storage::bounded::{Bounded, BoundedExtent, BoundedStorage, BoundedTable};
+pub use storage::inner::{Items, Storage, TableInner};
+pub use storage::table::{ArrayStorage, Table};
 pub use storage::view::TableView;
 
 #[cfg(feature = "alloc")]
@@ -99,7 +100,7 @@ pub use storage::view::TableView;
 pub use quantized::dyn_qtable::DynQTable;
 #[cfg(feature = "alloc")]
 #[cfg_attr(docsrs, doc(cfg(feature = "alloc")))]
-pub use storage::dyn_table::{BayesSpec, DynTable};
+pub use storage::dyn_table::{BayesSpec, DynTable, VecStorage};
 
 pub use math::fastmath::{
     fast_math_max_score_error, FastMath, FAST_MATH_MAX_REL_ERROR, FAST_MATH_MAX_SCORE_ERROR,

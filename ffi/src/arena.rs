@@ -250,19 +250,17 @@ pub(crate) unsafe fn decode_into(
         *slot = head;
         knots = tail;
     }
-    let view = LentTable {
+    let view = LentTable::lend(
         names,
         rows,
         priors,
         ml,
         map,
-        settings: settings.first_mut().ok_or(MLMAP_ERR_TOO_LARGE)?,
-        scratch_names: raw,
-        scratch_lens: lens,
+        settings.first_mut().ok_or(MLMAP_ERR_TOO_LARGE)?,
         bayes,
-        knots: lent_knots,
-    }
-    .decode(bytes)
+        lent_knots,
+    )
+    .decode(bytes, raw, lens)
     .map_err(|e| Failure::decoding(e, bytes))?;
     let control = arena.cast::<Control>();
     // SAFETY: the control block is the first `ArenaLayout::control(P)` bytes, disjoint

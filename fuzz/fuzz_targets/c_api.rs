@@ -74,7 +74,8 @@ fuzz_target!(|data: &[u8]| {
             d.k() <= limits.max_classes
                 && d.bins_ml() <= limits.max_bins
                 && d.bins_map() <= limits.max_bins
-                && d.bayes().is_none_or(|b| b.bins() <= limits.max_bins_bayes)
+                && d.bayes_head()
+                    .is_none_or(|b| b.bins() <= limits.max_bins_bayes)
         });
         assert_eq!(s == MLMAP_OK, fits, "{s:?} vs {:?}", host.as_ref().err());
     }
@@ -88,7 +89,7 @@ fuzz_target!(|data: &[u8]| {
         let mut settings = mlmap_settings_t::default();
         // SAFETY: a decoded table and a settings struct.
         assert_eq!(unsafe { mlmap_settings(t, &mut settings) }, MLMAP_OK);
-        let open = host.open();
+        let open = host.open_params();
         has_open = open.is_some();
         let (temperature, epsilon) = open.map_or((0.0, 0.0), |o| (o.temperature(), o.epsilon()));
         assert_eq!(settings.temperature.to_bits(), temperature.to_bits());

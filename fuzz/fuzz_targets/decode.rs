@@ -34,7 +34,9 @@ fn decode_all(bytes: &[u8]) {
         );
     }
     let shape = dynt.as_ref().ok().map(|d| {
-        let bayes = d.bayes().map_or((0, 0), |b| (b.bins(), b.categories()));
+        let bayes = d
+            .bayes_head()
+            .map_or((0, 0), |b| (b.bins(), b.categories()));
         (d.k(), d.bins_ml(), d.bins_map(), bayes.0, bayes.1)
     });
     decode_as::<3, 22, 17, 22, 4>(bytes, &dynt, shape);
@@ -87,7 +89,7 @@ fn decode_as<
                     mlmap::invariants::check_open_params(p.temperature(), p.epsilon()).is_ok(),
                     "decoded open head out of range: {p:?}"
                 );
-                let d = dynt.as_ref().ok().and_then(DynTable::open);
+                let d = dynt.as_ref().ok().and_then(DynTable::open_params);
                 assert_eq!(d, Some(p), "DynTable reads another open head");
             }
             None if B_BAYES > 0 => {

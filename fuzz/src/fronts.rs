@@ -25,7 +25,7 @@ fn dyn_with<M: Backend, const K: usize>(
         Head::Ml => dynt.ml_into(x, objectness, &mut out, &mut scratch[..K]),
         Head::Map => dynt.map_into::<M>(x, objectness, &mut out, &mut scratch[..K]),
         Head::Bayes | Head::Open => {
-            let c = dynt.bayes().map_or(K, |b| b.categories());
+            let c = dynt.bayes_head().map_or(K, |b| b.categories());
             let s = &mut scratch[..c];
             if head == Head::Bayes {
                 dynt.bayes_into::<M>(x, objectness, &mut out, s)

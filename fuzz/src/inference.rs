@@ -86,10 +86,10 @@ pub fn logits<
         Logit::Edge { map, k, ulps } => {
             let k = usize::from(k);
             let x = if map {
-                let h = t.map_histogram(i).expect("class exists");
+                let h = t.map_histograms().get(i).expect("class exists");
                 h.edge(k % (B_MAP + 1))
             } else {
-                let h = t.ml_histogram(i).expect("class exists");
+                let h = t.ml_histograms().get(i).expect("class exists");
                 h.edge(k % (B_ML + 1))
             };
             step(x, ulps)
@@ -178,8 +178,8 @@ fn check_likelihoods<
 ) {
     let tail = t.settings().upper_tail;
     for (i, &xi) in x.iter().enumerate() {
-        let ml = t.ml_histogram(i).expect("class exists");
-        let map = t.map_histogram(i).expect("class exists");
+        let ml = t.ml_histograms().get(i).expect("class exists");
+        let map = t.map_histograms().get(i).expect("class exists");
         for (head, got, want) in [
             (
                 "ML",
@@ -214,10 +214,10 @@ fn map_mass<
 ) -> [f32; K] {
     let tail = t.settings().upper_tail;
     core::array::from_fn(|i| {
-        let h = t.map_histogram(i).expect("class exists");
+        let h = t.map_histograms().get(i).expect("class exists");
         let l = h.likelihood(x[i], tail);
         if l > 0.0 {
-            l * t.prior(i).expect("class exists").pdf::<M>(x[i])
+            l * t.priors().get(i).expect("class exists").pdf::<M>(x[i])
         } else {
             0.0
         }
@@ -256,7 +256,7 @@ pub fn check_detection<
     let tail = t.settings().upper_tail;
     if let (Ok(ml), Ok(map), Ok(fast)) = (&ml, &map, &fast) {
         let l: [f32; K] = core::array::from_fn(|i| {
-            let h = t.ml_histogram(i).expect("class exists");
+            let h = t.ml_histograms().get(i).expect("class exists");
             h.likelihood(x[i], tail)
         });
         check_scores("ML", &ml.0, objectness, &l, t.settings().lambda_ml);

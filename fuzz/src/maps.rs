@@ -59,8 +59,8 @@ impl ArbMaps {
             let knots = k.knots();
             let has = match head {
                 Head::Ml | Head::Map => true,
-                Head::Bayes => t.bayes().is_some(),
-                Head::Open => t.open().is_some(),
+                Head::Bayes => t.bayes_head().is_some(),
+                Head::Open => t.open_params().is_some(),
             };
             let valid = mlmap::RecalMap::new(&knots).is_ok() && has;
             match t.clone().with_map(*head, knots.clone()) {

@@ -69,17 +69,19 @@ pub fn check_table<
     must(invariants::check_table(t), "table invariants");
     for i in 0..K {
         let ml = t
-            .ml_histogram(i)
+            .ml_histograms()
+            .get(i)
             .expect("ML histogram of an existing class");
         let map = t
-            .map_histogram(i)
+            .map_histograms()
+            .get(i)
             .expect("MAP histogram of an existing class");
         check_histogram(ml, Head::Ml, i, B_ML);
         check_histogram(map, Head::Map, i, B_MAP);
-        check_prior(t.prior(i).expect("prior of an existing class"), i);
+        check_prior(t.priors().get(i).expect("prior of an existing class"), i);
         assert_eq!(t.class_index(t.class_name(i).unwrap_or_default()), Some(i));
     }
-    assert!(t.class_name(K).is_none() && t.ml_histogram(K).is_none() && t.spec(K).is_none());
+    assert!(t.class_name(K).is_none() && t.ml_histograms().get(K).is_none() && t.spec(K).is_none());
 }
 
 /// Checks every table invariant of a run-time shaped table.

@@ -39,7 +39,7 @@ pub fn scores(
 ) -> Result<Vec<f32>, (usize, InferError)> {
     let k = table.k();
     let view = table.view();
-    let cats = table.bayes().map_or(k, |b| b.categories()).max(k);
+    let cats = table.bayes_head().map_or(k, |b| b.categories()).max(k);
     let mut scratch = vec![0.0f32; cats];
     let mut out = vec![0.0f32; objectness.len() * k];
     for (i, (row, &os)) in out.chunks_exact_mut(k).zip(objectness).enumerate() {

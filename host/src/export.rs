@@ -301,7 +301,7 @@ pub fn c_header(bytes: &[u8], name: &str, source: &str) -> Result<String, Export
         .and_then(|b| <[u8; 4]>::try_from(b).ok())
         .map_or(0, u32::from_le_bytes);
     let names: Vec<String> = table.class_names().map(c_comment).collect();
-    let bayes = match table.bayes() {
+    let bayes = match table.bayes_head() {
         Some(b) => format!(
             "Bayes head: {} bins per logit, {} categories",
             b.bins(),
@@ -309,7 +309,7 @@ pub fn c_header(bytes: &[u8], name: &str, source: &str) -> Result<String, Export
         ),
         None => "no Bayes head".to_owned(),
     };
-    let bayes = match table.open() {
+    let bayes = match table.open_params() {
         Some(o) => format!(
             "{bayes},\n * open head: temperature {}, epsilon {:e}",
             o.temperature(),

@@ -31,7 +31,7 @@
 )]
 
 pub use self::error::HostError;
-pub use mlmap_core::{BayesSpec, DynQTable, DynTable};
+pub use mlmap_core::{BayesSpec, DynQTable, DynTable, VecStorage};
 
 pub mod baselines;
 pub mod conformal;

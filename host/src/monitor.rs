@@ -20,7 +20,7 @@ const CONFORMAL_MAGIC: [u8; 4] = *b"MLMS";
 /// and `e[j][b]` is the sum of those counts over the categories divided by all
 /// training rows, `sum_c pi[c] h[c][j][b]`. `None` without a Bayes head.
 pub fn reference(table: &DynTable) -> Option<Vec<f64>> {
-    let bayes = table.bayes()?;
+    let bayes = table.bayes_head()?;
     let (k, bins, cats) = (bayes.logits(), bayes.bins(), bayes.categories());
     let lambda = f64::from(bayes.lambda());
     let total: f64 = bayes.all_rows().iter().map(|&n| n as f64).sum();
@@ -52,7 +52,7 @@ pub fn with_monitor(
     table: &DynTable,
     params: &MonitorParams,
 ) -> Result<Vec<u8>, MonitorError> {
-    let bayes = table.bayes().ok_or(MonitorError::NoBayesHead)?;
+    let bayes = table.bayes_head().ok_or(MonitorError::NoBayesHead)?;
     let (k, bins) = (bayes.logits(), bayes.bins());
     let shares: Vec<f32> = reference(table)
         .ok_or(MonitorError::NoBayesHead)?
@@ -72,7 +72,7 @@ pub fn with_monitor(
         crc,
         k,
         bins,
-        table.open().is_some(),
+        table.open_params().is_some(),
         params,
         &shares,
     )?;

@@ -85,7 +85,8 @@ impl PyTable {
         let (x, os) = rows_f32(&self.table, logits, objectness)?;
         let k = self.table.k();
         let view = self.table.view();
-        let mut scratch = vec![0.0f32; self.table.bayes().map_or(k, |b| b.categories()).max(k)];
+        let mut scratch =
+            vec![0.0f32; self.table.bayes_head().map_or(k, |b| b.categories()).max(k)];
         let mut sc = vec![0.0f32; k];
         let mut mask = vec![0u32; set_words(k)];
         let mut out = Vec::with_capacity(os.len());
@@ -127,8 +128,8 @@ pub fn conformal_fit(
     let head = Head::from_name(head).map_err(|e| value_error(format!("head: {e}")))?;
     let has = match head {
         Head::Ml | Head::Map => true,
-        Head::Bayes => t.bayes().is_some(),
-        Head::Open => t.open().is_some(),
+        Head::Bayes => t.bayes_head().is_some(),
+        Head::Open => t.open_params().is_some(),
     };
     if !has {
         return Err(value_error(format!("head: the table has no {head} head")));

@@ -55,8 +55,8 @@ fn methods(table: &DynTable, temperature: Option<f64>) -> Vec<Method> {
         .filter(|m| match m {
             Method::Sigmoid | Method::Softmax | Method::Ml | Method::Map => true,
             Method::Temperature => temperature.is_some(),
-            Method::Bayes => table.bayes().is_some(),
-            Method::Open => table.open().is_some(),
+            Method::Bayes => table.bayes_head().is_some(),
+            Method::Open => table.open_params().is_some(),
             Method::Isotonic | Method::Energy => false,
         })
         .collect()

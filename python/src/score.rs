@@ -35,7 +35,7 @@ fn score_chunk(
     out: &mut [f32],
 ) -> Result<(), RowError> {
     let view = table.view();
-    let cats = table.bayes().map_or(k, |b| b.categories().max(k));
+    let cats = table.bayes_head().map_or(k, |b| b.categories().max(k));
     let mut scratch = vec![0f32; cats];
     let mut x = vec![0f32; k];
     let mut one = |i: usize, xs: &[f32], s: &mut [f32]| {
@@ -79,13 +79,13 @@ pub fn score(
     n: usize,
 ) -> Result<Vec<f32>, RowError> {
     let k = table.k();
-    if head == Head::Bayes && table.bayes().is_none() {
+    if head == Head::Bayes && table.bayes_head().is_none() {
         return Err(RowError {
             row: 0,
             error: InferError::NoBayesHead,
         });
     }
-    if head == Head::Open && table.open().is_none() {
+    if head == Head::Open && table.open_params().is_none() {
         return Err(RowError {
             row: 0,
             error: InferError::NoOpenHead,

@@ -80,10 +80,10 @@ impl PyTable {
 
     fn head_names(&self) -> Vec<&'static str> {
         let mut heads = vec![Head::Ml.name(), Head::Map.name()];
-        if self.table.bayes().is_some() {
+        if self.table.bayes_head().is_some() {
             heads.push(Head::Bayes.name());
         }
-        if self.table.open().is_some() {
+        if self.table.open_params().is_some() {
             heads.push(Head::Open.name());
         }
         heads
@@ -198,7 +198,7 @@ impl PyTable {
     /// Bins per logit of the Bayes head; `None` without that head.
     #[getter]
     fn bins_bayes(&self) -> Option<usize> {
-        self.table.bayes().map(|b| b.bins())
+        self.table.bayes_head().map(|b| b.bins())
     }
 
     /// Smoothing lambda of the ML head (the `f32` the table stores).
@@ -216,7 +216,7 @@ impl PyTable {
     /// Smoothing lambda of the Bayes head; `None` without that head.
     #[getter]
     fn lambda_bayes(&self) -> Option<f32> {
-        self.table.bayes().map(|b| b.lambda())
+        self.table.bayes_head().map(|b| b.lambda())
     }
 
     /// The open head's parameters (DESIGN §1.8), the `f32` values the table stores:
@@ -225,7 +225,7 @@ impl PyTable {
     /// fits them on validation data.
     #[getter]
     fn open_params<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let Some(o) = self.table.open() else {
+        let Some(o) = self.table.open_params() else {
             return Ok(None);
         };
         let d = PyDict::new(py);
@@ -256,7 +256,7 @@ impl PyTable {
     /// one; `None` without that head.
     #[getter]
     fn categories(&self) -> Option<Vec<String>> {
-        let b = self.table.bayes()?;
+        let b = self.table.bayes_head()?;
         let mut c = self.classes();
         if b.has_background() {
             c.push("background".into());
@@ -422,7 +422,7 @@ impl PyTable {
 
     fn __repr__(&self) -> String {
         let classes: Vec<String> = self.table.class_names().map(|c| format!("'{c}'")).collect();
-        let bins = match self.table.bayes() {
+        let bins = match self.table.bayes_head() {
             Some(b) => format!(
                 "ml={}, map={}, bayes={}",
                 self.table.bins_ml(),
@@ -431,7 +431,7 @@ impl PyTable {
             ),
             None => format!("ml={}, map={}", self.table.bins_ml(), self.table.bins_map()),
         };
-        let open = match self.table.open() {
+        let open = match self.table.open_params() {
             Some(o) => format!(
                 ", open=(temperature={:?}, epsilon={:?})",
                 o.temperature(),

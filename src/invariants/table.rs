@@ -195,9 +195,9 @@ pub fn check_table<
     check_names(names)?;
     for class in 0..K {
         let (Some(prior), Some(ml), Some(map)) = (
-            table.prior(class),
-            table.ml_histogram(class),
-            table.map_histogram(class),
+            table.priors().get(class),
+            table.ml_histograms().get(class),
+            table.map_histograms().get(class),
         ) else {
             return Err(missing(class));
         };
@@ -258,7 +258,7 @@ pub fn check_dyn_table(table: &crate::host::DynTable) -> Result<(), Violation> {
         check_histogram(Head::Ml, class, ml, table.bins_ml())?;
         check_histogram(Head::Map, class, map, table.bins_map())?;
     }
-    if let Some(head) = table.bayes() {
+    if let Some(head) = table.bayes_head() {
         check_bayes(&head, k)?;
     }
     Ok(())

@@ -607,7 +607,7 @@ fn bayes_checks_by_hand() {
     for background in [false, true] {
         let t = hand_table(background);
         assert_eq!(check_dyn_table(&t), Ok(()));
-        let head = t.bayes().unwrap();
+        let head = t.bayes_head().unwrap();
         let sum = bayes_sum(&head);
         assert_eq!(sum, if background { Sum::AtMost } else { Sum::Equal });
         // Outside both axes: OS * pi = 0.8 * [1/4, 3/4] or 0.8 * [1/8, 3/8].

@@ -53,7 +53,7 @@ fn demo_runs_the_whole_job() {
     );
     let tuned = read_table(&out.join("tuned.mlmap"));
     assert_eq!((tuned.bins_ml(), tuned.bins_map()), (22, 17));
-    assert_eq!(tuned.bayes().map(|b| b.bins()), Some(22));
+    assert_eq!(tuned.bayes_head().map(|b| b.bins()), Some(22));
     let v: Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("eval.json")).unwrap()).unwrap();
     assert_eq!(keys(&v["methods"]), sorted(&methods(true, &tuned)));

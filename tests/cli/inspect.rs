@@ -151,7 +151,7 @@ fn inspect_shows_the_bayes_head() {
     let d = dir.path();
     let path = bayes_table();
     let t = read_table(Path::new(&path));
-    let b = t.bayes().unwrap();
+    let b = t.bayes_head().unwrap();
     let v = ok_json(d, &["inspect", &path, "--format", "json"]);
     let j = &v["bayes"];
     assert_eq!(j["bins"], 22);

@@ -407,32 +407,32 @@ const MAP: LayerHead = LayerHead {
 /// The Bayes head, with its device default backend `FastMath` (DESIGN §1.6).
 const BAYES: LayerHead = LayerHead {
     name: "bayes",
-    present: |t| t.bayes().is_some(),
+    present: |t| t.bayes_head().is_some(),
     scores: |t, x, os| {
-        let cats = t.bayes().map_or(0, |b| b.categories());
+        let cats = t.bayes_head().map_or(0, |b| b.categories());
         let (mut out, mut scratch) = (vec![0f32; t.k()], vec![0f32; cats]);
         t.bayes_into::<FastMath>(x, os, &mut out, &mut scratch)
             .unwrap();
         out
     },
-    bins: |t| t.bayes().map_or(0, |b| b.bins()),
-    lambda: |t| t.bayes().map_or(0.0, |b| b.lambda()),
+    bins: |t| t.bayes_head().map_or(0, |b| b.bins()),
+    lambda: |t| t.bayes_head().map_or(0.0, |b| b.lambda()),
 };
 
 /// The open head, with its device default backend `FastMath` (DESIGN §1.8); its bins and
 /// lambda are its Bayes head's.
 const OPEN: LayerHead = LayerHead {
     name: "open",
-    present: |t| t.open().is_some(),
+    present: |t| t.open_params().is_some(),
     scores: |t, x, os| {
-        let cats = t.bayes().map_or(0, |b| b.categories());
+        let cats = t.bayes_head().map_or(0, |b| b.categories());
         let (mut out, mut scratch) = (vec![0f32; t.k()], vec![0f32; cats]);
         t.open_into::<FastMath>(x, os, &mut out, &mut scratch)
             .unwrap();
         out
     },
-    bins: |t| t.bayes().map_or(0, |b| b.bins()),
-    lambda: |t| t.bayes().map_or(0.0, |b| b.lambda()),
+    bins: |t| t.bayes_head().map_or(0, |b| b.bins()),
+    lambda: |t| t.bayes_head().map_or(0.0, |b| b.lambda()),
 };
 
 /// The heads `table` holds, in the order of the CLI's columns and reports.
@@ -465,7 +465,7 @@ fn methods(with_val: bool, table: &DynTable) -> Vec<&'static str> {
     }
     m.push("energy");
     m.extend(heads_of(table).map(|h| h.name));
-    if table.open().is_some() && !m.contains(&"open") {
+    if table.open_params().is_some() && !m.contains(&"open") {
         m.push("open");
     }
     m

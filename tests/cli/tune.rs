@@ -206,7 +206,7 @@ fn tune_with_never_seen_objects_guards_and_compares_every_head() {
         "map",
         "bayes",
     ];
-    if t.open().is_some() {
+    if t.open_params().is_some() {
         compared.push("open");
     }
     assert_eq!(keys(methods), sorted(&compared));
@@ -330,7 +330,7 @@ fn tune_without_the_bayes_head_and_bad_guards() {
     args.retain(|a| *a != "--bins-bayes" && *a != "6,20");
     args.extend(["--no-bayes", "--format", "json"]);
     let v = ok_json(d, &args);
-    assert!(read_table(&d.join("t.mlmap")).bayes().is_none());
+    assert!(read_table(&d.join("t.mlmap")).bayes_head().is_none());
     assert!(v.get("bayes").is_none());
     assert!(v["validation"]["methods"].get("bayes").is_none());
     assert!(v["validation"]["methods"]["softmax"]

@@ -5,7 +5,7 @@ use defmt::{write, Format, Formatter};
 
 use crate::{
     BatchError, CharKind, ClassName, DecodeError, EdgeMode, EncodeError, Gaussian, GaussianError,
-    Head, Histogram, HistogramError, InferError, NameError, Scores, Settings, Table, TableError,
+    Head, Histogram, HistogramError, InferError, NameError, Scores, Settings, TableError,
     UpperTail,
 };
 
@@ -223,31 +223,6 @@ impl<const K: usize> Format for Scores<K> {
     }
 }
 
-impl<
-        const K: usize,
-        const B_ML: usize,
-        const B_MAP: usize,
-        const B_BAYES: usize,
-        const C: usize,
-        const N: usize,
-        const F: usize,
-    > Format for Table<K, B_ML, B_MAP, B_BAYES, C, N, F>
-{
-    fn format(&self, f: Formatter<'_>) {
-        write!(
-            f,
-            "Table<{}, {}, {}, {}, {}> {{ classes: {=[?]}, {} }}",
-            K,
-            B_ML,
-            B_MAP,
-            B_BAYES,
-            C,
-            &self.names[..],
-            self.settings
-        )
-    }
-}
-
 impl Format for crate::Libm {
     fn format(&self, f: Formatter<'_>) {
         write!(f, "Libm")
@@ -425,28 +400,6 @@ impl<const N: usize> Format for crate::Bounded<N> {
     }
 }
 
-impl<
-        const K: usize,
-        const B_ML: usize,
-        const B_MAP: usize,
-        const B_BAYES: usize,
-        const C: usize,
-    > Format for crate::BoundedTable<K, B_ML, B_MAP, B_BAYES, C>
-{
-    fn format(&self, f: Formatter<'_>) {
-        write!(
-            f,
-            "BoundedTable<{}, {}, {}, {}, {}> {{ {} }}",
-            K,
-            B_ML,
-            B_MAP,
-            B_BAYES,
-            C,
-            self.view()
-        )
-    }
-}
-
 #[cfg(feature = "alloc")]
 impl Format for crate::BayesSpec {
     fn format(&self, f: Formatter<'_>) {
@@ -458,12 +411,5 @@ impl Format for crate::BayesSpec {
             self.ranges.len(),
             self.terms.len()
         )
-    }
-}
-
-#[cfg(feature = "alloc")]
-impl Format for crate::DynTable {
-    fn format(&self, f: Formatter<'_>) {
-        write!(f, "DynTable {{ {} }}", self.view())
     }
 }

@@ -5,7 +5,10 @@
 use defmt::{write, Format, Formatter};
 
 use crate::lidar::{Calibration, LidarError, Pixel, Projected, Projection, R0};
-use crate::storage::lent::{ArenaLayout, LentBayes, LentTable, QClass, QLogit, StorageShape};
+use crate::storage::inner::{Storage, TableInner};
+use crate::storage::lent::{
+    ArenaLayout, LentBayes, LentParts, LentStorage, QClass, QLogit, StorageShape,
+};
 
 impl Format for StorageShape {
     fn format(&self, f: Formatter<'_>) {
@@ -33,13 +36,81 @@ impl Format for ArenaLayout {
     }
 }
 
-impl Format for LentTable<'_, '_, '_> {
+/// Every table, whatever its storage: `Table { TableView {...} }`, `BoundedTable`,
+/// `DynTable`, `LentTable` (an empty bounded table: no classes).
+impl<S: Storage> Format for TableInner<S> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "{=str} {{ {} }}", S::NAME, self.in_use_view())
+    }
+}
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+        const N: usize,
+        const F: usize,
+    > Format for crate::ArrayStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>
+{
     fn format(&self, f: Formatter<'_>) {
         write!(
             f,
-            "LentTable {{ K: {}, Bayes: {} }}",
-            self.names.len(),
-            self.bayes
+            "ArrayStorage<{}, {}, {}, {}, {}, {}, {}>",
+            K, B_ML, B_MAP, B_BAYES, C, N, F
+        )
+    }
+}
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+        const N: usize,
+        const F: usize,
+    > Format for crate::BoundedStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>
+{
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "BoundedStorage<{}, {}, {}, {}, {}, {}, {}>",
+            K, B_ML, B_MAP, B_BAYES, C, N, F
+        )
+    }
+}
+
+impl Format for crate::BoundedExtent {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "BoundedExtent {{ K: {}, Bayes: {} bins x {} categories, objectness: {} }}",
+            self.classes, self.bins_bayes, self.categories, self.objectness
+        )
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl Format for crate::VecStorage {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "VecStorage")
+    }
+}
+
+impl Format for LentStorage<'_> {
+    fn format(&self, f: Formatter<'_>) {
+        write!(f, "LentStorage")
+    }
+}
+
+impl Format for LentParts {
+    fn format(&self, f: Formatter<'_>) {
+        write!(
+            f,
+            "LentParts {{ Bayes: {}, objectness: {} }}",
+            self.bayes, self.objectness
         )
     }
 }

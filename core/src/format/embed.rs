@@ -91,6 +91,7 @@ pub const fn table<
         recal_len,
         bayes_os_axis,
         bayes_os_terms,
+        extent: (),
     }
 }
 

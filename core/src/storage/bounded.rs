@@ -3,20 +3,21 @@
 //! maximum). For firmware that receives its table at run time (a calibration sector, a
 //! C program through the C API) and must reserve its memory statically.
 //!
-//! A `BoundedTable` owns fixed arrays and lends their used prefixes to the same
-//! [`TableView`] (encoding, scoring) and the same decoder as [`Table`](crate::Table) and
-//! `DynTable`: it accepts exactly the bytes `DynTable::from_bytes` accepts, as long as
-//! their shape fits, and gives bit-identical scores.
+//! A `BoundedTable` is the one [`TableInner`] over fixed arrays ([`BoundedStorage`])
+//! of which it records the prefix in use: the same decoder, [`TableView`] (encoding,
+//! scoring) and accessors as [`Table`](crate::Table) and `DynTable`. It accepts exactly
+//! the bytes `DynTable::from_bytes` accepts, as long as their shape fits, and gives
+//! bit-identical scores.
 
-use crate::diagnostics::error::{DecodeError, TableError};
+use crate::diagnostics::error::DecodeError;
 use crate::format::name::ClassName;
 use crate::format::wire::{self, Settings};
-use crate::heads::bayes::BayesView;
-use crate::heads::open::OpenParams;
-use crate::heads::recal::{Knot, Maps, MAX_KNOTS};
+use crate::heads::recal::{Knot, MAX_KNOTS};
 use crate::math::gaussian::Gaussian;
 use crate::math::histogram::{Axis, Histogram};
-use crate::storage::view::{BayesStorage, Slots, TableView};
+use crate::storage::inner::{private::Sealed, InUse, Storage, TableInner};
+use crate::storage::lent::StorageShape;
+use crate::storage::view::TableView;
 
 /// Up to `N` floats, the number in use known at run time: the frequency storage of a
 /// [`BoundedTable`]'s histograms (`Histogram<Bounded<N>>`).
@@ -136,8 +137,7 @@ impl<const N: usize> AsMut<[f32]> for Bounded<N> {
 /// assert_eq!(mlmap::decide(&out, &[5.1, -2.0, -1.3]), 0);
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
-#[derive(Debug, Clone, PartialEq)]
-pub struct BoundedTable<
+pub type BoundedTable<
     const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
@@ -145,41 +145,165 @@ pub struct BoundedTable<
     const C: usize,
     const N: usize = 0,
     const F: usize = 0,
-> {
+> = TableInner<BoundedStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>>;
+
+/// The storage of a [`BoundedTable`]: arrays of its maximum shape, of which a prefix is
+/// in use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoundedStorage<
+    const K: usize,
+    const B_ML: usize,
+    const B_MAP: usize,
+    const B_BAYES: usize,
+    const C: usize,
+    const N: usize,
+    const F: usize,
+>;
+
+/// The shape in use of a [`BoundedTable`] (all zeros: empty).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct BoundedExtent {
     /// Classes in use; 0 for an empty table.
-    k: usize,
-    names: [ClassName; K],
-    rows: [u64; K],
-    priors: [Gaussian; K],
-    ml: [Histogram<Bounded<B_ML>>; K],
-    map: [Histogram<Bounded<B_MAP>>; K],
-    settings: Settings,
+    pub(crate) classes: usize,
     /// Bayes bins per logit in use; 0 without a Bayes head.
-    bayes_bins: usize,
+    pub(crate) bins_bayes: usize,
     /// Bayes categories in use; 0 without a Bayes head.
-    bayes_categories: usize,
-    /// Log-terms in use: `bayes_categories * k * bayes_bins`.
-    bayes_terms_len: usize,
-    bayes_axes: [Axis; K],
+    pub(crate) categories: usize,
+    /// Whether the table in use has the objectness feature.
+    pub(crate) objectness: bool,
+}
+
+impl BoundedExtent {
+    const EMPTY: Self = Self {
+        classes: 0,
+        bins_bayes: 0,
+        categories: 0,
+        objectness: false,
+    };
+}
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+        const N: usize,
+        const F: usize,
+    > Sealed for BoundedStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>
+{
+}
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+        const N: usize,
+        const F: usize,
+    > Storage for BoundedStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>
+{
+    type Names = [ClassName; K];
+    type Rows = [u64; K];
+    type Priors = [Gaussian; K];
+    type MlFreqs = Bounded<B_ML>;
+    type MapFreqs = Bounded<B_MAP>;
+    type Ml = [Histogram<Bounded<B_ML>>; K];
+    type Map = [Histogram<Bounded<B_MAP>>; K];
+    type Settings = Settings;
+    type Axes = [Axis; K];
     /// The log-terms as one flat buffer (the array's shape only bounds its length): the
     /// first `categories * k * bins` floats hold them logit-major (logit, bin, category),
-    /// as [`BayesView`] reads them.
-    bayes_terms: [[[f32; B_BAYES]; K]; C],
-    bayes_rows: [u64; C],
-    bayes_log_prior: [f32; C],
-    bayes_lambda: f32,
-    bayes_log_lambda: f32,
-    bayes_open: Option<OpenParams>,
-    /// Room for each head's recalibration map (DESIGN §1.9): ML, MAP, Bayes, open.
-    recal: [[Knot; N]; 4],
-    /// Knots in use in each of `recal` (0: no map).
-    recal_len: [u8; 4],
-    /// Room for the objectness feature (DESIGN §1.6) when `F = 1`: its axis and its
-    /// terms (the first `bayes_categories * bayes_bins` in use).
-    bayes_os_axis: [Axis; F],
-    bayes_os_terms: [[[f32; B_BAYES]; C]; F],
-    /// Whether the table in use has the feature.
-    bayes_has_os: bool,
+    /// as [`BayesView`](crate::BayesView) reads them.
+    type Terms = [[[f32; B_BAYES]; K]; C];
+    type Categories = [u64; C];
+    type LogPrior = [f32; C];
+    type Knots = [Knot; N];
+    type ObjectnessAxis = [Axis; F];
+    type ObjectnessTerms = [[[f32; B_BAYES]; C]; F];
+    type Extent = BoundedExtent;
+    type View<'a> = Option<TableView<'a, Bounded<B_ML>, Bounded<B_MAP>>>;
+
+    const NAME: &'static str = "BoundedTable";
+    const OBJECTNESS_REQUIRED: bool = false;
+
+    #[inline]
+    fn in_use(t: &BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N, F>) -> InUse {
+        let e = t.extent;
+        InUse {
+            classes: e.classes,
+            bayes: e.bins_bayes > 0,
+            categories: e.categories,
+            terms: e
+                .categories
+                .saturating_mul(e.classes)
+                .saturating_mul(e.bins_bayes),
+            objectness: e.objectness,
+            objectness_terms: e.categories.saturating_mul(e.bins_bayes),
+            maps: N > 0,
+        }
+    }
+
+    /// Refuses a shape above the maximum and a body too short for the shape; sets the
+    /// number of frequencies of each histogram in use.
+    fn prepare(
+        t: &mut BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N, F>,
+        s: &StorageShape,
+        (shape, bayes_shape): ((u16, u16, u16), (u16, u16)),
+        body: usize,
+    ) -> Result<(), DecodeError> {
+        if s.classes > K || s.bins_ml > B_ML || s.bins_map > B_MAP {
+            return Err(DecodeError::ShapeMismatch {
+                expected: BoundedTable::<K, B_ML, B_MAP, B_BAYES, C, N, F>::MAX_SHAPE,
+                found: shape,
+            });
+        }
+        if s.bins_bayes > B_BAYES || s.categories > C {
+            return Err(DecodeError::BayesShapeMismatch {
+                expected: BoundedTable::<K, B_ML, B_MAP, B_BAYES, C, N, F>::MAX_BAYES_SHAPE,
+                found: bayes_shape,
+            });
+        }
+        // As `DynTable::from_bytes`: every frequency and term takes 4 bytes of the body, so
+        // a header announcing more than the body holds is malformed (the same error for
+        // the same bytes on the host and here).
+        if s.floats().saturating_mul(4) > body {
+            return Err(DecodeError::Malformed);
+        }
+        // Each histogram of a class in use holds the announced number of frequencies
+        // (a longer sequence is malformed, a shorter one has the wrong bin count).
+        let malformed = DecodeError::Malformed;
+        for h in t.ml.get_mut(..s.classes).ok_or(malformed)? {
+            h.freqs.set_len(s.bins_ml);
+        }
+        for h in t.map.get_mut(..s.classes).ok_or(malformed)? {
+            h.freqs.set_len(s.bins_map);
+        }
+        Ok(())
+    }
+
+    fn finish(
+        t: &mut BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N, F>,
+        s: &StorageShape,
+        objectness: bool,
+        _: [usize; 4],
+    ) {
+        t.extent = BoundedExtent {
+            classes: s.classes,
+            bins_bayes: s.bins_bayes,
+            categories: s.categories,
+            objectness,
+        };
+    }
+
+    #[inline]
+    fn wrap<'a>(
+        t: &'a BoundedTable<K, B_ML, B_MAP, B_BAYES, C, N, F>,
+        view: TableView<'a, Bounded<B_ML>, Bounded<B_MAP>>,
+    ) -> Option<TableView<'a, Bounded<B_ML>, Bounded<B_MAP>>> {
+        (t.extent.classes > 0).then_some(view)
+    }
 }
 
 impl<
@@ -234,16 +358,12 @@ impl<
             }
         }
         Self {
-            k: 0,
             names: [ClassName::EMPTY; K],
             rows: [0; K],
             priors: [Gaussian::ZERO; K],
             ml: [hist::<B_ML>(); K],
             map: [hist::<B_MAP>(); K],
             settings: Settings::ZERO,
-            bayes_bins: 0,
-            bayes_categories: 0,
-            bayes_terms_len: 0,
             bayes_axes: [Axis::ZERO; K],
             bayes_terms: [[[0.0; B_BAYES]; K]; C],
             bayes_rows: [0; C],
@@ -255,7 +375,7 @@ impl<
             recal_len: [0; 4],
             bayes_os_axis: [Axis::ZERO; F],
             bayes_os_terms: [[[0.0; B_BAYES]; C]; F],
-            bayes_has_os: false,
+            extent: BoundedExtent::EMPTY,
         }
     }
 
@@ -278,7 +398,7 @@ impl<
         #[allow(clippy::let_unit_value)]
         let () = Self::SHAPE_OK;
         self.clear();
-        let result = self.decode_inner(bytes);
+        let result = self.decode_with(bytes, |_| ([""; K], [(0, 0); K]));
         if result.is_err() {
             self.clear();
         }
@@ -299,179 +419,14 @@ impl<
 
     /// Empties the table.
     pub fn clear(&mut self) {
-        self.k = 0;
-        self.bayes_bins = 0;
-        self.bayes_categories = 0;
-        self.bayes_terms_len = 0;
+        self.extent = BoundedExtent::EMPTY;
         self.recal_len = [0; 4];
-        self.bayes_has_os = false;
     }
 
     /// Whether the table holds no table.
     #[inline]
     pub fn is_empty(&self) -> bool {
-        self.k == 0
-    }
-
-    /// The table as a [`TableView`] (the implementation every kind of table shares),
-    /// or `None` when it is empty.
-    #[inline]
-    pub fn view(&self) -> Option<TableView<'_, Bounded<B_ML>, Bounded<B_MAP>>> {
-        let k = self.k;
-        if k == 0 {
-            return None;
-        }
-        let bayes = if self.bayes_bins > 0 {
-            let c = self.bayes_categories;
-            let terms = c.checked_mul(k)?.checked_mul(self.bayes_bins)?;
-            Some(BayesView {
-                axes: self.bayes_axes.get(..k)?,
-                terms: self
-                    .bayes_terms
-                    .as_flattened()
-                    .as_flattened()
-                    .get(..terms)?,
-                rows: self.bayes_rows.get(..c)?,
-                log_prior: self.bayes_log_prior.get(..c)?,
-                lambda: self.bayes_lambda,
-                log_lambda: self.bayes_log_lambda,
-                open: self.bayes_open,
-                objectness: if self.bayes_has_os {
-                    let n = c.checked_mul(self.bayes_bins)?;
-                    Some((
-                        *self.bayes_os_axis.first()?,
-                        self.bayes_os_terms.as_flattened().as_flattened().get(..n)?,
-                    ))
-                } else {
-                    None
-                },
-            })
-        } else {
-            None
-        };
-        Some(TableView {
-            names: self.names.get(..k)?,
-            rows: self.rows.get(..k)?,
-            priors: self.priors.get(..k)?,
-            ml: self.ml.get(..k)?,
-            map: self.map.get(..k)?,
-            bayes,
-            settings: &self.settings,
-            maps: Maps([
-                self.recal_slice(0),
-                self.recal_slice(1),
-                self.recal_slice(2),
-                self.recal_slice(3),
-            ]),
-        })
-    }
-
-    /// The knots in use in map slot `slot`.
-    fn recal_slice(&self, slot: usize) -> &[Knot] {
-        let len = self.recal_len.get(slot).map_or(0, |&n| usize::from(n));
-        self.recal
-            .get(slot)
-            .and_then(|k| k.get(..len))
-            .unwrap_or_default()
-    }
-
-    /// [`BoundedTable::decode`] on a cleared table.
-    fn decode_inner(&mut self, bytes: &[u8]) -> Result<(), DecodeError> {
-        // A quantized section appended to the table is not part of it.
-        let bytes = crate::quantized::qtable::table_part(bytes);
-        let (header, body) = wire::open(bytes)?;
-        let k = usize::from(header.k);
-        let (bins_ml, bins_map) = (usize::from(header.bins_ml), usize::from(header.bins_map));
-        let (bins_bayes, categories) = (
-            usize::from(header.bins_bayes),
-            usize::from(header.categories),
-        );
-        if k > K || bins_ml > B_ML || bins_map > B_MAP {
-            return Err(DecodeError::ShapeMismatch {
-                expected: Self::MAX_SHAPE,
-                found: header.shape(),
-            });
-        }
-        if bins_bayes > B_BAYES || categories > C {
-            return Err(DecodeError::BayesShapeMismatch {
-                expected: Self::MAX_BAYES_SHAPE,
-                found: header.bayes_shape(),
-            });
-        }
-        // As `DynTable::from_bytes`: every frequency and term takes 4 bytes of the body, so
-        // a header announcing more than the body holds is malformed (the same error for
-        // the same bytes on the host and here).
-        let terms = categories.saturating_mul(k).saturating_mul(bins_bayes);
-        let floats = k
-            .saturating_mul(bins_ml.saturating_add(bins_map))
-            .saturating_add(terms);
-        if floats.saturating_mul(4) > body.len() {
-            return Err(DecodeError::Malformed);
-        }
-        // Each histogram of a class in use holds the announced number of frequencies
-        // (a longer sequence is malformed, a shorter one has the wrong bin count).
-        let malformed = DecodeError::Malformed;
-        let ml = self.ml.get_mut(..k).ok_or(malformed)?;
-        let map = self.map.get_mut(..k).ok_or(malformed)?;
-        for h in ml.iter_mut() {
-            h.freqs.set_len(bins_ml);
-        }
-        for h in map.iter_mut() {
-            h.freqs.set_len(bins_map);
-        }
-        let mut raw_names = [""; K];
-        let mut lens = [(0, 0); K];
-        let [r0, r1, r2, r3] = &mut self.recal;
-        let mut has_os = false;
-        let knots = Slots {
-            names: self.names.get_mut(..k).ok_or(malformed)?,
-            raw_names: raw_names.get_mut(..k).ok_or(malformed)?,
-            lens: lens.get_mut(..k).ok_or(malformed)?,
-            rows: self.rows.get_mut(..k).ok_or(malformed)?,
-            priors: self.priors.get_mut(..k).ok_or(malformed)?,
-            ml,
-            map,
-            settings: &mut self.settings,
-            bayes: if bins_bayes > 0 {
-                Some(BayesStorage {
-                    axes: self.bayes_axes.get_mut(..k).ok_or(malformed)?,
-                    terms: self
-                        .bayes_terms
-                        .as_flattened_mut()
-                        .as_flattened_mut()
-                        .get_mut(..terms)
-                        .ok_or(malformed)?,
-                    rows: self.bayes_rows.get_mut(..categories).ok_or(malformed)?,
-                    log_prior: self
-                        .bayes_log_prior
-                        .get_mut(..categories)
-                        .ok_or(malformed)?,
-                    lambda: &mut self.bayes_lambda,
-                    log_lambda: &mut self.bayes_log_lambda,
-                    open: &mut self.bayes_open,
-                    objectness_axis: &mut self.bayes_os_axis,
-                    objectness_terms: self.bayes_os_terms.as_flattened_mut().as_flattened_mut(),
-                    objectness_required: false,
-                    has_objectness: &mut has_os,
-                })
-            } else {
-                None
-            },
-            recal: [r0, r1, r2, r3],
-        }
-        .decode(&header, body)?;
-        if k < 2 {
-            return Err(TableError::ClassCount.into());
-        }
-        for (len, n) in self.recal_len.iter_mut().zip(knots) {
-            // At most MAX_KNOTS (checked by the decoder).
-            *len = u8::try_from(n).unwrap_or(0);
-        }
-        self.bayes_has_os = has_os;
-        (self.k, self.bayes_bins, self.bayes_categories) = (k, bins_bayes, categories);
-        self.bayes_terms_len = terms;
-        let view = self.view().ok_or(malformed)?;
-        wire::check_canonical(bytes.len(), &view)
+        self.extent.classes == 0
     }
 }
 

@@ -1,52 +1,128 @@
 //! A table whose shape is known only at run time (feature `alloc`), for the host
-//! (fitting, tuning, the CLI) and for `mlmap`'s build script. It owns vectors and lends
-//! them to the same [`TableView`] and decoder as [`Table`](crate::Table), so host and
-//! device accept the same bytes and compute identical scores.
+//! (fitting, tuning, the CLI) and for `mlmap`'s build script: the one
+//! [`TableInner`] over vectors ([`VecStorage`]), so that host and device accept the
+//! same bytes, through the same decoder, and compute identical scores through the same
+//! [`TableView`].
 
 use alloc::vec;
 use alloc::vec::Vec;
 
-use crate::diagnostics::error::{DecodeError, EncodeError, Head, InferError, MapError, TableError};
+use crate::diagnostics::error::{DecodeError, EncodeError, Head, MapError, TableError};
 use crate::format::name::ClassName;
-use crate::format::wire::{self, ClassSpec, Settings};
-use crate::heads::bayes::{self, BayesView};
+use crate::format::wire::{ClassSpec, Settings};
+use crate::heads::bayes;
 use crate::heads::open::OpenParams;
-use crate::heads::recal::{self, head_slot, Knot, Maps, RecalMap, MAX_KNOTS};
+use crate::heads::recal::{self, head_slot, Knot, MAX_KNOTS};
 use crate::math::gaussian::Gaussian;
 use crate::math::histogram::{Axis, Histogram};
-use crate::math::Backend;
-use crate::storage::view::{self, BayesStorage, Slots, TableView};
+use crate::storage::inner::{private::Sealed, InUse, Storage, TableInner};
+use crate::storage::lent::StorageShape;
+use crate::storage::view::{self, TableView};
 
-/// A validated table with a run-time number of classes and bins.
+/// A validated table with a run-time number of classes and bins: the one
+/// [`TableInner`] over vectors.
 ///
 /// Same invariants, same wire format and same scores as
 /// [`Table`](crate::Table); convert with [`DynTable::from_table`] and
 /// [`Table::try_from`](crate::Table).
-#[derive(Debug, Clone, PartialEq)]
-pub struct DynTable {
-    names: Vec<ClassName>,
-    rows: Vec<u64>,
-    priors: Vec<Gaussian>,
-    ml: Vec<Histogram<Vec<f32>>>,
-    map: Vec<Histogram<Vec<f32>>>,
-    settings: Settings,
-    bayes: Option<DynBayes>,
-    /// Each head's recalibration map (DESIGN §1.9), ML, MAP, Bayes, open; empty: none.
-    maps: [Vec<Knot>; 4],
-}
+pub type DynTable = TableInner<VecStorage>;
 
-/// The Bayes head's storage.
-#[derive(Debug, Clone, PartialEq)]
-struct DynBayes {
-    axes: Vec<Axis>,
-    terms: Vec<f32>,
-    rows: Vec<u64>,
-    log_prior: Vec<f32>,
-    lambda: f32,
-    log_lambda: f32,
-    open: Option<OpenParams>,
-    /// The objectness feature's axis and terms (bin-major, then category).
-    objectness: Option<(Axis, Vec<f32>)>,
+/// The storage of a [`DynTable`]: vectors of exactly the table's shape (a table
+/// without a Bayes head has no axes, terms or categories; one without the objectness
+/// feature no objectness axis).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VecStorage;
+
+impl Sealed for VecStorage {}
+
+impl Storage for VecStorage {
+    type Names = Vec<ClassName>;
+    type Rows = Vec<u64>;
+    type Priors = Vec<Gaussian>;
+    type MlFreqs = Vec<f32>;
+    type MapFreqs = Vec<f32>;
+    type Ml = Vec<Histogram<Vec<f32>>>;
+    type Map = Vec<Histogram<Vec<f32>>>;
+    type Settings = Settings;
+    type Axes = Vec<Axis>;
+    type Terms = Vec<f32>;
+    type Categories = Vec<u64>;
+    type LogPrior = Vec<f32>;
+    type Knots = Vec<Knot>;
+    type ObjectnessAxis = Vec<Axis>;
+    type ObjectnessTerms = Vec<f32>;
+    type Extent = ();
+    type View<'a> = TableView<'a, Vec<f32>, Vec<f32>>;
+
+    const NAME: &'static str = "DynTable";
+    const OBJECTNESS_REQUIRED: bool = false;
+
+    /// All of it: the vectors have the table's shape.
+    #[inline]
+    fn in_use(t: &DynTable) -> InUse {
+        InUse {
+            classes: t.names.len(),
+            bayes: !t.bayes_axes.is_empty(),
+            categories: t.bayes_rows.len(),
+            terms: t.bayes_terms.len(),
+            objectness: !t.bayes_os_axis.is_empty(),
+            objectness_terms: t.bayes_os_terms.len(),
+            maps: true,
+        }
+    }
+
+    /// Allocates for the shape, after refusing a header announcing more floats than the
+    /// body holds.
+    fn prepare(
+        t: &mut DynTable,
+        s: &StorageShape,
+        _: ((u16, u16, u16), (u16, u16)),
+        body: usize,
+    ) -> Result<(), DecodeError> {
+        // Every frequency and term takes 4 bytes of the body: refuse a header announcing
+        // more than the body holds before allocating for it.
+        if s.floats().checked_mul(4).is_none_or(|n| n > body) {
+            return Err(DecodeError::Malformed);
+        }
+        let (k, bins, cats) = (s.classes, s.bins_bayes, s.categories);
+        let hist = |bins: usize| crate::lent::empty_histogram(vec![0.0; bins]);
+        t.names = vec![ClassName::EMPTY; k];
+        t.rows = vec![0; k];
+        t.priors = vec![Gaussian::ZERO; k];
+        t.ml = vec![hist(s.bins_ml); k];
+        t.map = vec![hist(s.bins_map); k];
+        if bins > 0 {
+            t.bayes_axes = vec![Axis::ZERO; k];
+            t.bayes_terms = vec![0.0; cats * k * bins];
+            t.bayes_rows = vec![0; cats];
+            t.bayes_log_prior = vec![0.0; cats];
+            // Room for the objectness feature, whose B * C terms a table with K >= 1
+            // logits' terms (counted in the check above) bounds; a header with K = 0
+            // (invalid: refused after parsing) gets none, so that it cannot ask for an
+            // allocation the body does not back.
+            t.bayes_os_axis = vec![Axis::ZERO];
+            t.bayes_os_terms = vec![0.0; cats * bins * k.min(1)];
+        }
+        t.recal = core::array::from_fn(|_| vec![Knot::ZERO; MAX_KNOTS]);
+        Ok(())
+    }
+
+    /// Keeps the knots in use, and the objectness feature's room only when the table
+    /// has it.
+    fn finish(t: &mut DynTable, _: &StorageShape, objectness: bool, knots: [usize; 4]) {
+        for (map, n) in t.recal.iter_mut().zip(knots) {
+            map.truncate(n);
+        }
+        if !objectness {
+            t.bayes_os_axis = Vec::new();
+            t.bayes_os_terms = Vec::new();
+        }
+    }
+
+    #[inline]
+    fn wrap<'a>(_: &'a DynTable, view: TableView<'a, Vec<f32>, Vec<f32>>) -> Self::View<'a> {
+        view
+    }
 }
 
 /// A fitted Bayes head before validation (docs/DESIGN.md §1.6), for
@@ -59,7 +135,7 @@ pub struct BayesSpec {
     pub rows: Vec<u64>,
     /// First and last edge of each logit's bins (K pairs).
     pub ranges: Vec<(f32, f32)>,
-    /// `ln(h + lambda)` per logit, bin and category, logit-major (see [`BayesView`]).
+    /// `ln(h + lambda)` per logit, bin and category, logit-major (see [`BayesView`](crate::BayesView)).
     pub terms: Vec<f32>,
     /// The objectness feature (DESIGN §1.6), when fitted: the first and last edge of
     /// its axis over the objectness logit, and its `ln(h + lambda)` per bin and
@@ -84,16 +160,8 @@ impl DynTable {
         }
         let bins_ml = classes.first().map_or(0, |c| c.ml_freqs.len());
         let bins_map = classes.first().map_or(0, |c| c.map_freqs.len());
-        let mut t = Self {
-            names: Vec::with_capacity(classes.len()),
-            rows: Vec::with_capacity(classes.len()),
-            priors: Vec::with_capacity(classes.len()),
-            ml: Vec::with_capacity(classes.len()),
-            map: Vec::with_capacity(classes.len()),
-            settings,
-            bayes: None,
-            maps: Default::default(),
-        };
+        let mut t = Self::empty(settings);
+        t.names.reserve(classes.len());
         for (i, spec) in classes.into_iter().enumerate() {
             let c = spec.validate(i, bins_ml, bins_map)?;
             t.names.push(c.name);
@@ -156,23 +224,31 @@ impl DynTable {
             // Format version 4 holds only names of the rule of DESIGN §6.15.
             self.check_names()?;
         }
-        self.bayes = Some(DynBayes {
-            axes,
-            terms: spec.terms,
-            rows: spec.rows,
-            log_prior,
-            lambda: spec.lambda,
-            log_lambda,
-            open: None,
-            objectness,
-        });
+        self.bayes_axes = axes;
+        self.bayes_terms = spec.terms;
+        self.bayes_rows = spec.rows;
+        self.bayes_log_prior = log_prior;
+        (self.bayes_lambda, self.bayes_log_lambda) = (spec.lambda, log_lambda);
+        self.bayes_open = None;
+        (self.bayes_os_axis, self.bayes_os_terms) = match objectness {
+            Some((axis, terms)) => (vec![axis], terms),
+            None => (Vec::new(), Vec::new()),
+        };
         Ok(self)
     }
 
     /// The table without its Bayes head (and without the maps of the Bayes and open
     /// heads).
     pub fn without_bayes(mut self) -> Self {
-        self.bayes = None;
+        let empty = Self::empty(self.settings);
+        self.bayes_axes = empty.bayes_axes;
+        self.bayes_terms = empty.bayes_terms;
+        self.bayes_rows = empty.bayes_rows;
+        self.bayes_log_prior = empty.bayes_log_prior;
+        (self.bayes_lambda, self.bayes_log_lambda) = (0.0, 0.0);
+        self.bayes_open = None;
+        self.bayes_os_axis = empty.bayes_os_axis;
+        self.bayes_os_terms = empty.bayes_os_terms;
         self.clear_map(Head::Bayes);
         self.clear_map(Head::Open);
         self
@@ -193,8 +269,11 @@ impl DynTable {
         }
         recal::check(knots.as_slice()).map_err(map_err)?;
         self.check_names()?;
-        if let Some(slot) = self.maps.get_mut(head_slot(head)) {
-            *slot = knots;
+        let slot = head_slot(head);
+        if let (Some(map), Some(len)) = (self.recal.get_mut(slot), self.recal_len.get_mut(slot)) {
+            // At most MAX_KNOTS (checked above).
+            *len = u8::try_from(knots.len()).unwrap_or(0);
+            *map = knots;
         }
         Ok(self)
     }
@@ -207,18 +286,16 @@ impl DynTable {
 
     /// The table without any recalibration map: the heads' own scores.
     pub fn without_maps(mut self) -> Self {
-        self.maps = Default::default();
+        self.recal = Default::default();
+        self.recal_len = [0; 4];
         self
     }
 
-    /// The recalibration map of `head`, if the table holds one.
-    pub fn recal_map(&self, head: Head) -> Option<RecalMap<'_>> {
-        self.view().recal_map(head)
-    }
-
     fn clear_map(&mut self, head: Head) {
-        if let Some(slot) = self.maps.get_mut(head_slot(head)) {
-            slot.clear();
+        let slot = head_slot(head);
+        if let (Some(map), Some(len)) = (self.recal.get_mut(slot), self.recal_len.get_mut(slot)) {
+            map.clear();
+            *len = 0;
         }
     }
 
@@ -249,15 +326,18 @@ impl DynTable {
         // from an older file with another name cannot become one.
         self.check_names()?;
         let k = self.k();
-        let b = self.bayes.as_mut().ok_or(TableError::BayesShape)?;
-        let bins = b.axes.first().map_or(0, Axis::bins);
-        let features = k + usize::from(b.objectness.is_some());
-        b.open = Some(OpenParams::new(
+        let bins = self
+            .bayes_axes
+            .first()
+            .map(Axis::bins)
+            .ok_or(TableError::BayesShape)?;
+        let features = k + self.bayes_os_axis.len();
+        self.bayes_open = Some(OpenParams::new(
             temperature,
             epsilon,
             features,
             bins,
-            b.lambda,
+            self.bayes_lambda,
         )?);
         Ok(self)
     }
@@ -265,9 +345,7 @@ impl DynTable {
     /// The table without its open head (a version-2 table if it has a Bayes head and no
     /// map), and without that head's map.
     pub fn without_open(mut self) -> Self {
-        if let Some(b) = self.bayes.as_mut() {
-            b.open = None;
-        }
+        self.bayes_open = None;
         self.clear_map(Head::Open);
         self
     }
@@ -279,125 +357,9 @@ impl DynTable {
     /// As [`Table::from_bytes`](crate::Table::from_bytes), except that there is no
     /// shape to mismatch.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, DecodeError> {
-        // A quantized section appended to the table is not part of it.
-        let bytes = crate::quantized::qtable::table_part(bytes);
-        let (header, body) = wire::open(bytes)?;
-        let k = usize::from(header.k);
-        let (bins_ml, bins_map) = (usize::from(header.bins_ml), usize::from(header.bins_map));
-        let (bins_bayes, categories) = (
-            usize::from(header.bins_bayes),
-            usize::from(header.categories),
-        );
-        // Every frequency and term takes 4 bytes of the body: refuse a header announcing
-        // more than the body holds before allocating for it.
-        let floats = k * (bins_ml + bins_map) + categories * k * bins_bayes;
-        if floats.checked_mul(4).is_none_or(|n| n > body.len()) {
-            return Err(DecodeError::Malformed);
-        }
-        let hist = |bins: usize| Histogram {
-            lo: 0.0,
-            hi: 0.0,
-            width: 0.0,
-            inv_width: 0.0,
-            freqs: vec![0.0; bins],
-        };
-        let mut t = Self {
-            names: vec![ClassName::EMPTY; k],
-            rows: vec![0; k],
-            priors: vec![Gaussian::ZERO; k],
-            ml: vec![hist(bins_ml); k],
-            map: vec![hist(bins_map); k],
-            settings: Settings::ZERO,
-            bayes: (bins_bayes > 0).then(|| DynBayes {
-                axes: vec![Axis::ZERO; k],
-                terms: vec![0.0; categories * k * bins_bayes],
-                rows: vec![0; categories],
-                log_prior: vec![0.0; categories],
-                lambda: 0.0,
-                log_lambda: 0.0,
-                open: None,
-                // Room for the objectness feature, whose B * C terms a table with K >= 1
-                // logits' terms (counted in the check above) bounds; a header with K = 0
-                // (invalid: refused after parsing) gets none, so that it cannot ask for
-                // an allocation the body does not back.
-                objectness: Some((Axis::ZERO, vec![0.0; categories * bins_bayes * k.min(1)])),
-            }),
-            maps: core::array::from_fn(|_| vec![Knot::ZERO; MAX_KNOTS]),
-        };
-        let mut has_objectness = false;
-        let mut raw_names = vec![""; k];
-        let mut lens = vec![(0, 0); k];
-        let [r0, r1, r2, r3] = &mut t.maps;
-        let knots = Slots {
-            names: &mut t.names,
-            raw_names: &mut raw_names,
-            lens: &mut lens,
-            rows: &mut t.rows,
-            priors: &mut t.priors,
-            ml: &mut t.ml,
-            map: &mut t.map,
-            settings: &mut t.settings,
-            bayes: t.bayes.as_mut().map(|b| {
-                let (axis, terms) = match &mut b.objectness {
-                    Some((a, t)) => (core::slice::from_mut(a), t.as_mut_slice()),
-                    None => (&mut [][..], &mut [][..]),
-                };
-                BayesStorage {
-                    axes: &mut b.axes,
-                    terms: &mut b.terms,
-                    rows: &mut b.rows,
-                    log_prior: &mut b.log_prior,
-                    lambda: &mut b.lambda,
-                    log_lambda: &mut b.log_lambda,
-                    open: &mut b.open,
-                    objectness_axis: axis,
-                    objectness_terms: terms,
-                    objectness_required: false,
-                    has_objectness: &mut has_objectness,
-                }
-            }),
-            recal: [r0, r1, r2, r3],
-        }
-        .decode(&header, body)?;
-        for (map, n) in t.maps.iter_mut().zip(knots) {
-            map.truncate(n);
-        }
-        if !has_objectness {
-            if let Some(b) = t.bayes.as_mut() {
-                b.objectness = None;
-            }
-        }
-        if k < 2 {
-            return Err(TableError::ClassCount.into());
-        }
-        wire::check_canonical(bytes.len(), &t.view())?;
+        let mut t = Self::empty(Settings::ZERO);
+        t.decode_with(bytes, |k| (vec![""; k], vec![(0, 0); k]))?;
         Ok(t)
-    }
-
-    /// The table as a [`TableView`], the implementation every kind of table shares.
-    #[inline]
-    pub fn view(&self) -> TableView<'_, Vec<f32>, Vec<f32>> {
-        TableView {
-            names: &self.names,
-            rows: &self.rows,
-            priors: &self.priors,
-            ml: &self.ml,
-            map: &self.map,
-            bayes: self.bayes.as_ref().map(|b| BayesView {
-                axes: &b.axes,
-                terms: &b.terms,
-                rows: &b.rows,
-                log_prior: &b.log_prior,
-                lambda: b.lambda,
-                log_lambda: b.log_lambda,
-                open: b.open,
-                objectness: b.objectness.as_ref().map(|(a, t)| (*a, t.as_slice())),
-            }),
-            settings: &self.settings,
-            maps: Maps(core::array::from_fn(|h| {
-                self.maps.get(h).map_or(&[][..], Vec::as_slice)
-            })),
-        }
     }
 
     /// Encodes the table (the same bytes [`Table::to_slice`](crate::Table::to_slice)
@@ -414,132 +376,29 @@ impl DynTable {
         Ok(buf)
     }
 
-    /// The statistics of class `i` (ML and MAP heads), as slices.
-    pub fn spec(&self, i: usize) -> Option<ClassSpec<'_, &[f32], &[f32]>> {
-        self.view().spec(i)
-    }
-
-    /// Number of classes K.
-    pub fn k(&self) -> usize {
-        self.names.len()
-    }
-
-    /// Bins of the ML head.
-    pub fn bins_ml(&self) -> usize {
-        self.view().bins_ml()
-    }
-
-    /// Bins of the MAP head.
-    pub fn bins_map(&self) -> usize {
-        self.view().bins_map()
-    }
-
-    /// Class names in order.
-    pub fn class_names(&self) -> impl ExactSizeIterator<Item = &str> + '_ {
-        self.names.iter().map(ClassName::as_str)
-    }
-
-    /// Hyper-parameters and policies of the ML and MAP heads.
-    pub fn settings(&self) -> &Settings {
-        &self.settings
-    }
-
-    /// Training rows per class.
-    pub fn rows(&self) -> &[u64] {
-        &self.rows
-    }
-
-    /// The ML histograms, one per class.
-    pub fn ml_histograms(&self) -> &[Histogram<Vec<f32>>] {
-        &self.ml
-    }
-
-    /// The MAP histograms, one per class.
-    pub fn map_histograms(&self) -> &[Histogram<Vec<f32>>] {
-        &self.map
-    }
-
-    /// The Gaussian priors, one per class.
-    pub fn priors(&self) -> &[Gaussian] {
-        &self.priors
-    }
-
-    /// The Bayes head, if the table has one.
-    pub fn bayes(&self) -> Option<BayesView<'_>> {
-        self.view().bayes()
-    }
-
-    /// The open head's parameters, if the table has that head.
-    pub fn open(&self) -> Option<OpenParams> {
-        self.view().open()
-    }
-
-    /// ML scores of one detection into `out` (length K); `scratch` is any K floats.
-    ///
-    /// # Errors
-    ///
-    /// As [`Table::ml`](crate::Table::ml), plus [`InferError::Length`] when a slice
-    /// does not have K entries.
-    pub fn ml_into(
-        &self,
-        logits: &[f32],
-        objectness: f32,
-        out: &mut [f32],
-        scratch: &mut [f32],
-    ) -> Result<(), InferError> {
-        self.view().ml_into(logits, objectness, out, scratch)
-    }
-
-    /// MAP scores of one detection with backend `M` into `out` (length K).
-    ///
-    /// # Errors
-    ///
-    /// As [`DynTable::ml_into`].
-    pub fn map_into<M: Backend>(
-        &self,
-        logits: &[f32],
-        objectness: f32,
-        out: &mut [f32],
-        scratch: &mut [f32],
-    ) -> Result<(), InferError> {
-        self.view().map_into::<M>(logits, objectness, out, scratch)
-    }
-
-    /// Bayes scores of one detection with backend `M` into `out` (length K);
-    /// `scratch` holds one float per Bayes category (K or K + 1). `M = FastMath` gives
-    /// the bits of [`Table::bayes`](crate::Table::bayes).
-    ///
-    /// # Errors
-    ///
-    /// [`InferError::NoBayesHead`] without that head; otherwise as
-    /// [`DynTable::ml_into`].
-    pub fn bayes_into<M: Backend>(
-        &self,
-        logits: &[f32],
-        objectness: f32,
-        out: &mut [f32],
-        scratch: &mut [f32],
-    ) -> Result<(), InferError> {
-        self.view()
-            .bayes_into::<M>(logits, objectness, out, scratch)
-    }
-
-    /// Open-head scores of one detection with backend `M` into `out` (length K);
-    /// `scratch` holds one float per Bayes category. `M = FastMath` gives the bits of
-    /// [`Table::open`](crate::Table::open).
-    ///
-    /// # Errors
-    ///
-    /// [`InferError::NoOpenHead`] without that head; otherwise as
-    /// [`DynTable::ml_into`].
-    pub fn open_into<M: Backend>(
-        &self,
-        logits: &[f32],
-        objectness: f32,
-        out: &mut [f32],
-        scratch: &mut [f32],
-    ) -> Result<(), InferError> {
-        self.view().open_into::<M>(logits, objectness, out, scratch)
+    /// A table of no class and no part, with `settings` (it does not satisfy the
+    /// invariants: every constructor fills it before it escapes).
+    fn empty(settings: Settings) -> Self {
+        Self {
+            names: Vec::new(),
+            rows: Vec::new(),
+            priors: Vec::new(),
+            ml: Vec::new(),
+            map: Vec::new(),
+            settings,
+            bayes_axes: Vec::new(),
+            bayes_terms: Vec::new(),
+            bayes_rows: Vec::new(),
+            bayes_log_prior: Vec::new(),
+            bayes_lambda: 0.0,
+            bayes_log_lambda: 0.0,
+            bayes_open: None,
+            recal: Default::default(),
+            recal_len: [0; 4],
+            bayes_os_axis: Vec::new(),
+            bayes_os_terms: Vec::new(),
+            extent: (),
+        }
     }
 
     /// The run-time shaped copy of a fixed-size table.
@@ -555,25 +414,26 @@ impl DynTable {
         t: &crate::Table<K, B_ML, B_MAP, B_BAYES, C, N, F>,
     ) -> Self {
         let v = t.view();
-        Self {
-            names: v.names.to_vec(),
-            rows: v.rows.to_vec(),
-            priors: v.priors.to_vec(),
-            ml: v.ml.iter().map(to_vec_hist).collect(),
-            map: v.map.iter().map(to_vec_hist).collect(),
-            settings: *v.settings,
-            bayes: v.bayes.map(|b| DynBayes {
-                axes: b.axes.to_vec(),
-                terms: b.terms.to_vec(),
-                rows: b.rows.to_vec(),
-                log_prior: b.log_prior.to_vec(),
-                lambda: b.lambda,
-                log_lambda: b.log_lambda,
-                open: b.open,
-                objectness: b.objectness.map(|(a, t)| (a, t.to_vec())),
-            }),
-            maps: v.maps.0.map(<[Knot]>::to_vec),
+        let mut d = Self::empty(*v.settings);
+        d.names = v.names.to_vec();
+        d.rows = v.rows.to_vec();
+        d.priors = v.priors.to_vec();
+        d.ml = v.ml.iter().map(to_vec_hist).collect();
+        d.map = v.map.iter().map(to_vec_hist).collect();
+        if let Some(b) = v.bayes {
+            d.bayes_axes = b.axes.to_vec();
+            d.bayes_terms = b.terms.to_vec();
+            d.bayes_rows = b.rows.to_vec();
+            d.bayes_log_prior = b.log_prior.to_vec();
+            (d.bayes_lambda, d.bayes_log_lambda) = (b.lambda, b.log_lambda);
+            d.bayes_open = b.open;
+            if let Some((axis, terms)) = b.objectness {
+                (d.bayes_os_axis, d.bayes_os_terms) = (vec![axis], terms.to_vec());
+            }
         }
+        d.recal = v.maps.0.map(<[Knot]>::to_vec);
+        d.recal_len = t.recal_len;
+        d
     }
 }
 

@@ -1,14 +1,17 @@
 //! Where a decoded table lives, and the one view every storage is scored through.
 //!
-//! `table` is the fixed-size [`Table`](crate::Table) (const generics), `bounded` the
-//! caller's storage of a bounded shape, `lent` storage lent slice by slice at exactly a
-//! table's shape (the C API's arena), `dyn_table` the run-time shape (feature `alloc`).
-//! Each decodes through the one decoder and scores through [`TableView`](crate::TableView)
-//! (`view`).
+//! `inner` is the one table type, [`TableInner<S>`](crate::TableInner), generic over its
+//! [`Storage`](crate::Storage): one decoder, one view, one set of accessors. The
+//! storages are `table` (fixed-size arrays: [`Table`](crate::Table)), `bounded` (arrays
+//! of a maximum shape, a prefix in use: [`BoundedTable`](crate::BoundedTable)), `lent`
+//! (slices lent at exactly a table's shape, the C API's arena) and `dyn_table` (vectors,
+//! feature `alloc`); each only adds its constructors. Every table scores through
+//! [`TableView`](crate::TableView) (`view`).
 
 pub mod bounded;
 #[cfg(feature = "alloc")]
 pub mod dyn_table;
+pub mod inner;
 pub mod lent;
 pub mod table;
 pub mod view;

@@ -1,22 +1,19 @@
-//! `Table<K, B_ML, B_MAP, B_BAYES, C, N, F>`: a validated, fixed-size table and the layer's
-//! entry points. The table owns arrays; everything it does is done by the
-//! [`TableView`] it lends them to.
+//! `Table<K, B_ML, B_MAP, B_BAYES, C, N, F>`: the [`TableInner`] over fixed-size arrays
+//! ([`ArrayStorage`]), and the layer's typed entry points. Everything else it does is
+//! done by the one [`TableInner`] (accessors, decoding) and its [`TableView`] (encoding,
+//! scoring).
 
-use crate::diagnostics::error::{
-    BatchError, DecodeError, EncodeError, Head, InferError, TableError,
-};
+use crate::diagnostics::error::{BatchError, DecodeError, EncodeError, InferError, TableError};
 use crate::format::name::ClassName;
 use crate::format::wire::{self, ClassSpec, Settings};
-use crate::heads::bayes::BayesView;
 use crate::heads::layer::Scores;
-use crate::heads::open::OpenParams;
-use crate::heads::recal::{Knot, Maps, RecalMap, MAX_KNOTS};
+use crate::heads::recal::{Knot, MAX_KNOTS};
 use crate::math::gaussian::Gaussian;
 use crate::math::histogram::{Axis, Histogram};
 use crate::math::Backend;
-use crate::storage::view::{
-    self, BayesBackend, BayesStorage, MapBackend, OpenBackend, Slots, TableView,
-};
+use crate::storage::inner::{private::Sealed, InUse, Storage, TableInner};
+use crate::storage::lent::StorageShape;
+use crate::storage::view::{self, BayesBackend, MapBackend, OpenBackend, TableView};
 
 /// A fitted table for `K` classes: `B_ML` bins in the ML head's histograms, `B_MAP` in
 /// the MAP head's, and, when `B_BAYES > 0`, a Bayes head with `B_BAYES` bins per logit
@@ -64,8 +61,7 @@ use crate::storage::view::{
 /// assert_eq!(table.map(&[50.0, -50.0], 0.9)?.0, [0.45, 0.45]);
 /// # Ok::<(), Box<dyn core::error::Error>>(())
 /// ```
-#[derive(Debug, Clone, PartialEq)]
-pub struct Table<
+pub type Table<
     const K: usize,
     const B_ML: usize,
     const B_MAP: usize,
@@ -73,31 +69,114 @@ pub struct Table<
     const C: usize = 0,
     const N: usize = 0,
     const F: usize = 0,
-> {
-    pub(crate) names: [ClassName; K],
-    pub(crate) rows: [u64; K],
-    pub(crate) priors: [Gaussian; K],
-    pub(crate) ml: [Histogram<[f32; B_ML]>; K],
-    pub(crate) map: [Histogram<[f32; B_MAP]>; K],
-    pub(crate) settings: Settings,
-    /// The Bayes head's bins per logit (unused when `B_BAYES = 0`).
-    pub(crate) bayes_axes: [Axis; K],
-    /// `ln(h + lambda)` per logit, bin and category (logit-major, see [`BayesView`]).
-    pub(crate) bayes_terms: [[[f32; C]; B_BAYES]; K],
-    pub(crate) bayes_rows: [u64; C],
-    pub(crate) bayes_log_prior: [f32; C],
-    pub(crate) bayes_lambda: f32,
-    pub(crate) bayes_log_lambda: f32,
-    /// The open head's parameters (DESIGN §1.8), `None` without that head.
-    pub(crate) bayes_open: Option<OpenParams>,
-    /// Room for each head's recalibration map (DESIGN §1.9), ML, MAP, Bayes, open.
-    pub(crate) recal: [[Knot; N]; 4],
-    /// Knots in use in each of `recal` (0: no map).
-    pub(crate) recal_len: [u8; 4],
-    /// The objectness feature's axis (DESIGN §1.6), when `F = 1`.
-    pub(crate) bayes_os_axis: [Axis; F],
-    /// The objectness feature's terms, bin-major then category, when `F = 1`.
-    pub(crate) bayes_os_terms: [[[f32; C]; B_BAYES]; F],
+> = TableInner<ArrayStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>>;
+
+/// The storage of a [`Table`]: arrays of the table's shape, fixed at compile time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArrayStorage<
+    const K: usize,
+    const B_ML: usize,
+    const B_MAP: usize,
+    const B_BAYES: usize,
+    const C: usize,
+    const N: usize,
+    const F: usize,
+>;
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+        const N: usize,
+        const F: usize,
+    > Sealed for ArrayStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>
+{
+}
+
+impl<
+        const K: usize,
+        const B_ML: usize,
+        const B_MAP: usize,
+        const B_BAYES: usize,
+        const C: usize,
+        const N: usize,
+        const F: usize,
+    > Storage for ArrayStorage<K, B_ML, B_MAP, B_BAYES, C, N, F>
+{
+    type Names = [ClassName; K];
+    type Rows = [u64; K];
+    type Priors = [Gaussian; K];
+    type MlFreqs = [f32; B_ML];
+    type MapFreqs = [f32; B_MAP];
+    type Ml = [Histogram<[f32; B_ML]>; K];
+    type Map = [Histogram<[f32; B_MAP]>; K];
+    type Settings = Settings;
+    type Axes = [Axis; K];
+    type Terms = [[[f32; C]; B_BAYES]; K];
+    type Categories = [u64; C];
+    type LogPrior = [f32; C];
+    type Knots = [Knot; N];
+    type ObjectnessAxis = [Axis; F];
+    type ObjectnessTerms = [[[f32; C]; B_BAYES]; F];
+    type Extent = ();
+    type View<'a> = TableView<'a, [f32; B_ML], [f32; B_MAP]>;
+
+    const NAME: &'static str = "Table";
+    const OBJECTNESS_REQUIRED: bool = F > 0;
+
+    /// All of it, known at compile time.
+    #[inline(always)]
+    fn in_use(_: &Table<K, B_ML, B_MAP, B_BAYES, C, N, F>) -> InUse {
+        InUse {
+            classes: K,
+            bayes: B_BAYES > 0,
+            categories: C,
+            terms: K * B_BAYES * C,
+            objectness: F > 0,
+            objectness_terms: F * B_BAYES * C,
+            maps: N > 0,
+        }
+    }
+
+    /// Refuses another shape than the type's.
+    fn prepare(
+        _: &mut Table<K, B_ML, B_MAP, B_BAYES, C, N, F>,
+        _: &StorageShape,
+        (shape, bayes_shape): ((u16, u16, u16), (u16, u16)),
+        _: usize,
+    ) -> Result<(), DecodeError> {
+        if shape != Table::<K, B_ML, B_MAP, B_BAYES, C, N, F>::SHAPE {
+            return Err(DecodeError::ShapeMismatch {
+                expected: Table::<K, B_ML, B_MAP, B_BAYES, C, N, F>::SHAPE,
+                found: shape,
+            });
+        }
+        if bayes_shape != Table::<K, B_ML, B_MAP, B_BAYES, C, N, F>::BAYES_SHAPE {
+            return Err(DecodeError::BayesShapeMismatch {
+                expected: Table::<K, B_ML, B_MAP, B_BAYES, C, N, F>::BAYES_SHAPE,
+                found: bayes_shape,
+            });
+        }
+        Ok(())
+    }
+
+    fn finish(
+        _: &mut Table<K, B_ML, B_MAP, B_BAYES, C, N, F>,
+        _: &StorageShape,
+        _: bool,
+        _: [usize; 4],
+    ) {
+    }
+
+    #[inline(always)]
+    fn wrap<'a>(
+        _: &'a Table<K, B_ML, B_MAP, B_BAYES, C, N, F>,
+        view: TableView<'a, [f32; B_ML], [f32; B_MAP]>,
+    ) -> TableView<'a, [f32; B_ML], [f32; B_MAP]> {
+        view
+    }
 }
 
 impl<
@@ -135,44 +214,6 @@ impl<
 
     /// `(B_BAYES, C)` as stored in a table header.
     const BAYES_SHAPE: (u16, u16) = (B_BAYES as u16, C as u16);
-
-    /// The table as a [`TableView`]: the one implementation of encoding and scoring
-    /// that every kind of table shares.
-    #[inline]
-    pub fn view(&self) -> TableView<'_, [f32; B_ML], [f32; B_MAP]> {
-        TableView {
-            names: &self.names,
-            rows: &self.rows,
-            priors: &self.priors,
-            ml: &self.ml,
-            map: &self.map,
-            bayes: (B_BAYES > 0).then_some(BayesView {
-                axes: &self.bayes_axes,
-                terms: self.bayes_terms.as_flattened().as_flattened(),
-                rows: &self.bayes_rows,
-                log_prior: &self.bayes_log_prior,
-                lambda: self.bayes_lambda,
-                log_lambda: self.bayes_log_lambda,
-                open: self.bayes_open,
-                objectness: self
-                    .bayes_os_axis
-                    .first()
-                    .map(|&a| (a, self.bayes_os_terms.as_flattened().as_flattened())),
-            }),
-            settings: &self.settings,
-            maps: if N == 0 {
-                Maps::NONE
-            } else {
-                Maps(core::array::from_fn(|h| {
-                    let len = self.recal_len.get(h).map_or(0, |&n| usize::from(n));
-                    self.recal
-                        .get(h)
-                        .and_then(|k| k.get(..len))
-                        .unwrap_or_default()
-                }))
-            },
-        }
-    }
 
     /// Builds a table without a Bayes head from fitted statistics, checking every
     /// invariant.
@@ -259,56 +300,8 @@ impl<
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, DecodeError> {
         #[allow(clippy::let_unit_value)]
         let () = Self::SHAPE_OK;
-        // A quantized section appended to the table is not part of it.
-        let bytes = crate::quantized::qtable::table_part(bytes);
-        let (header, body) = wire::open(bytes)?;
-        if header.shape() != Self::SHAPE {
-            return Err(DecodeError::ShapeMismatch {
-                expected: Self::SHAPE,
-                found: header.shape(),
-            });
-        }
-        if header.bayes_shape() != Self::BAYES_SHAPE {
-            return Err(DecodeError::BayesShapeMismatch {
-                expected: Self::BAYES_SHAPE,
-                found: header.bayes_shape(),
-            });
-        }
         let mut table = Self::placeholder(Settings::ZERO);
-        let mut raw_names = [""; K];
-        let mut lens = [(0, 0); K];
-        let [r0, r1, r2, r3] = &mut table.recal;
-        let mut has_objectness = false;
-        let knots = Slots {
-            names: &mut table.names,
-            raw_names: &mut raw_names,
-            lens: &mut lens,
-            rows: &mut table.rows,
-            priors: &mut table.priors,
-            ml: &mut table.ml,
-            map: &mut table.map,
-            settings: &mut table.settings,
-            bayes: (B_BAYES > 0).then_some(BayesStorage {
-                axes: &mut table.bayes_axes,
-                terms: table.bayes_terms.as_flattened_mut().as_flattened_mut(),
-                rows: &mut table.bayes_rows,
-                log_prior: &mut table.bayes_log_prior,
-                lambda: &mut table.bayes_lambda,
-                log_lambda: &mut table.bayes_log_lambda,
-                open: &mut table.bayes_open,
-                objectness_axis: &mut table.bayes_os_axis,
-                objectness_terms: table.bayes_os_terms.as_flattened_mut().as_flattened_mut(),
-                objectness_required: F > 0,
-                has_objectness: &mut has_objectness,
-            }),
-            recal: [r0, r1, r2, r3],
-        }
-        .decode(&header, body)?;
-        for (len, n) in table.recal_len.iter_mut().zip(knots) {
-            // At most MAX_KNOTS (checked by the decoder).
-            *len = u8::try_from(n).unwrap_or(0);
-        }
-        wire::check_canonical(bytes.len(), &table.view())?;
+        table.decode_with(bytes, |_| ([""; K], [(0, 0); K]))?;
         Ok(table)
     }
 
@@ -327,11 +320,6 @@ impl<
     /// Never.
     pub fn to_slice<'b>(&self, buf: &'b mut [u8]) -> Result<&'b mut [u8], EncodeError> {
         self.view().encode(buf)
-    }
-
-    /// The statistics of class `i` (ML and MAP heads), as slices.
-    pub fn spec(&self, i: usize) -> Option<ClassSpec<'_, &[f32], &[f32]>> {
-        self.view().spec(i)
     }
 
     /// A table of the right shape, all zeros (it does not satisfy the invariants): every
@@ -365,6 +353,7 @@ impl<
             recal_len: [0; 4],
             bayes_os_axis: [Axis::ZERO; F],
             bayes_os_terms: [[[0.0; C]; B_BAYES]; F],
+            extent: (),
         }
     }
 
@@ -523,17 +512,6 @@ impl<
         Ok(Scores(out))
     }
 
-    /// The open head's parameters, when the table has that head.
-    pub fn open_params(&self) -> Option<OpenParams> {
-        self.bayes_open
-    }
-
-    /// The recalibration map of `head` (DESIGN §1.9), when the table holds one; the
-    /// scoring calls apply it.
-    pub fn recal_map(&self, head: Head) -> Option<RecalMap<'_>> {
-        self.view().recal_map(head)
-    }
-
     /// ML scores of a batch: row `r` of `logits` and `objectness` (1.0 for every row when
     /// `None`) into row `r` of `out`.
     ///
@@ -626,46 +604,6 @@ impl<
         out: &mut [[f32; K]],
     ) -> Result<(), BatchError> {
         batch(logits, objectness, out, |x, os| self.open(x, os))
-    }
-
-    /// Name of class `i`.
-    pub fn class_name(&self, i: usize) -> Option<&str> {
-        self.names.get(i).map(ClassName::as_str)
-    }
-
-    /// Index of the class called `name`.
-    pub fn class_index(&self, name: &str) -> Option<usize> {
-        self.view().class_index(name)
-    }
-
-    /// Hyper-parameters and policies of the ML and MAP heads.
-    pub fn settings(&self) -> &Settings {
-        &self.settings
-    }
-
-    /// Number of training rows class `i` was fitted from.
-    pub fn rows(&self, i: usize) -> Option<u64> {
-        self.rows.get(i).copied()
-    }
-
-    /// The ML head's histogram of class `i`.
-    pub fn ml_histogram(&self, i: usize) -> Option<&Histogram<[f32; B_ML]>> {
-        self.ml.get(i)
-    }
-
-    /// The MAP head's histogram of class `i`.
-    pub fn map_histogram(&self, i: usize) -> Option<&Histogram<[f32; B_MAP]>> {
-        self.map.get(i)
-    }
-
-    /// The Gaussian prior of class `i`.
-    pub fn prior(&self, i: usize) -> Option<&Gaussian> {
-        self.priors.get(i)
-    }
-
-    /// The Bayes head, if this table type has one.
-    pub fn bayes_head(&self) -> Option<BayesView<'_>> {
-        self.view().bayes()
     }
 }
 

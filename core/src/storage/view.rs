@@ -1,8 +1,9 @@
 //! One table, whatever holds it: [`TableView`] borrows a table's storage and is the
 //! single implementation of everything a table does (describe a class, encode, check
 //! the canonical encoding, score with each head); [`Slots`] borrows it mutably and is
-//! the single decoder and validator. The fixed-size [`Table`](crate::Table) (arrays) and
-//! the host's [`DynTable`](crate::DynTable) (vectors) only own storage and lend it here.
+//! the single decoder and validator. The one table type,
+//! [`TableInner`](crate::TableInner), whatever its storage (arrays, bounded arrays,
+//! vectors, lent slices), only owns the storage and lends it here.
 
 use crate::diagnostics::error::{DecodeError, EncodeError, Head, InferError, TableError};
 use crate::format::name::{check_class_name, ClassName, NAME_RULE_VERSION};
@@ -282,9 +283,9 @@ impl<F: AsRef<[f32]>, G: AsRef<[f32]>> TableView<'_, F, G> {
     }
 }
 
-/// A table's storage, borrowed mutably for decoding: the one decoder behind
-/// [`Table::from_bytes`](crate::Table::from_bytes) and `DynTable::from_bytes`. Sized
-/// from the header before parsing, so a sequence longer than announced is malformed.
+/// A table's storage, borrowed mutably for decoding: the one decoder behind every
+/// table's (`TableInner::decode_with`). Sized from the header before parsing, so a
+/// sequence longer than announced is malformed.
 pub(crate) struct Slots<'t, 'a, F, G> {
     pub(crate) names: &'t mut [ClassName],
     /// The names as parsed, validated after the body is read.

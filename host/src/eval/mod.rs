@@ -138,7 +138,7 @@ pub fn head_scores(
     let k = table.k();
     let mut out = Vec::with_capacity(data.logits.len());
     // Scratch: K floats, or one per category for the Bayes head.
-    let cats = table.bayes().map_or(k, |b| b.categories().max(k));
+    let cats = table.bayes_head().map_or(k, |b| b.categories().max(k));
     let (mut x, mut s, mut scratch) = (vec![0f32; k], vec![0f32; k], vec![0f32; cats]);
     let view = table.view();
     let rows = data.logits.chunks_exact(k).zip(&data.objectness);
@@ -198,9 +198,9 @@ fn method_scores(
         Method::Energy => return Ok(None),
         Method::Ml => return head_scores(table, Head::Ml, data, path).map(Some),
         Method::Map => return head_scores(table, Head::Map, data, path).map(Some),
-        Method::Bayes if table.bayes().is_none() => return Ok(None),
+        Method::Bayes if table.bayes_head().is_none() => return Ok(None),
         Method::Bayes => return head_scores(table, Head::Bayes, data, path).map(Some),
-        Method::Open if table.open().is_none() => return Ok(None),
+        Method::Open if table.open_params().is_none() => return Ok(None),
         Method::Open => return head_scores(table, Head::Open, data, path).map(Some),
     };
     baseline(b, data, k, path).map(Some)

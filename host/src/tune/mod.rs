@@ -319,7 +319,7 @@ fn accumulate(
     all: bool,
 ) -> Option<Accumulator> {
     let k = val.k;
-    let cats = table.bayes().map_or(k, |b| b.categories()).max(k);
+    let cats = table.bayes_head().map_or(k, |b| b.categories()).max(k);
     let (mut scores, mut scratch) = (vec![0.0f32; k], vec![0.0f32; cats]);
     let view = table.view();
     let mut acc = judge.accumulator(all)?;

@@ -54,7 +54,7 @@ fn score(p: &OpenSearchParams<'_>, epsilon: f32, all: bool) -> Result<Candidate,
         p.table.clone().with_open(t, epsilon).map_err(|e| {
             format!("open head with temperature {t:e} and epsilon {epsilon:e}: {e}")
         })?;
-    let head = table.bayes().ok_or("the table has no Bayes head")?;
+    let head = table.bayes_head().ok_or("the table has no Bayes head")?;
     let (bins, lambda) = (head.bins(), head.lambda());
     let acc = super::accumulate(&table, Head::Open, &p.val, &p.judge, all);
     Ok(Candidate {

@@ -469,8 +469,8 @@ fn compare(
     methods.push((Method::Isotonic, isotonic, None));
     for method in [Method::Ml, Method::Map, Method::Bayes, Method::Open] {
         let Some(head) = method.head() else { continue };
-        if (head == Head::Bayes && table.bayes().is_none())
-            || (head == Head::Open && table.open().is_none())
+        if (head == Head::Bayes && table.bayes_head().is_none())
+            || (head == Head::Open && table.open_params().is_none())
         {
             continue;
         }

@@ -121,7 +121,7 @@ pub struct MapChoice {
 /// (maps left out).
 fn points(table: &DynTable, head: Head, val: &ValRows<'_>) -> Vec<Option<(f32, bool)>> {
     let k = val.k;
-    let cats = table.bayes().map_or(k, |b| b.categories()).max(k);
+    let cats = table.bayes_head().map_or(k, |b| b.categories()).max(k);
     let (mut s, mut scratch) = (vec![0.0f32; k], vec![0.0f32; cats]);
     let view = table.view().without_maps();
     val.logits

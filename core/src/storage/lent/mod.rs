@@ -11,14 +11,16 @@
 //! [`LentQTable`] does the same for a quantized section: its per-class records in lent
 //! storage, its masses and terms read in place from the section's bytes.
 
-use crate::diagnostics::error::{DecodeError, TableError};
+use core::marker::PhantomData;
+
+use crate::diagnostics::error::DecodeError;
 use crate::format::name::ClassName;
-use crate::format::wire::{self, Header, Settings};
-use crate::heads::bayes::BayesView;
-use crate::heads::recal::{Knot, Maps};
+use crate::format::wire::Settings;
+use crate::heads::recal::Knot;
 use crate::math::gaussian::Gaussian;
 use crate::math::histogram::{Axis, Histogram};
-use crate::storage::view::{BayesStorage, Slots, TableView};
+use crate::storage::inner::{maps_of, private::Sealed, view_of, InUse, Parts, Storage, TableInner};
+use crate::storage::view::TableView;
 
 mod arena;
 mod shape;
@@ -52,32 +54,141 @@ pub const fn empty_histogram<F>(freqs: F) -> Histogram<F> {
     }
 }
 
-/// Storage for one table, lent slice by slice (`'t`), each slice holding exactly the
-/// items of a [`StorageShape`]; `'s` and `'a` are the decoder's scratch and the bytes,
-/// used only while [`LentTable::decode`] runs. Fill every slice with the placeholders
-/// of this module before lending it.
-#[derive(Debug)]
-pub struct LentTable<'t, 's, 'a> {
-    /// K class names.
-    pub names: &'t mut [ClassName],
-    /// K training row counts.
-    pub rows: &'t mut [u64],
-    /// K priors.
-    pub priors: &'t mut [Gaussian],
-    /// K ML histograms, each over its own `bins_ml` frequencies.
-    pub ml: &'t mut [Histogram<&'t mut [f32]>],
-    /// K MAP histograms, each over its own `bins_map` frequencies.
-    pub map: &'t mut [Histogram<&'t mut [f32]>],
-    /// The settings.
-    pub settings: &'t mut Settings,
-    /// Scratch: K names as parsed.
-    pub scratch_names: &'s mut [&'a str],
-    /// Scratch: K pairs of frequency counts as parsed.
-    pub scratch_lens: &'s mut [(usize, usize)],
-    /// The Bayes head's storage, for a table with one.
-    pub bayes: Option<LentBayes<'t>>,
-    /// Each head's map (ML, MAP, Bayes, open): `knots[h]` knots.
-    pub knots: [&'t mut [Knot]; 4],
+/// A table in storage lent slice by slice (`'t`), each slice holding exactly the items
+/// of a [`StorageShape`]: the one [`TableInner`] over [`LentStorage`]. Lend the slices
+/// with [`LentTable::lend`] (each filled with the placeholders of this module) and
+/// decode into them with [`LentTable::decode`].
+pub type LentTable<'t> = TableInner<LentStorage<'t>>;
+
+/// The storage of a [`LentTable`]: slices lent by the caller, of exactly the table's
+/// shape.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LentStorage<'t>(PhantomData<&'t mut ()>);
+
+/// Which optional parts a [`LentTable`] has room for, and holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LentParts {
+    /// Whether the storage was lent with a Bayes head's.
+    pub(crate) bayes: bool,
+    /// Whether the decoded table has the objectness feature.
+    pub(crate) objectness: bool,
+}
+
+impl Sealed for LentStorage<'_> {}
+
+impl<'t> Storage for LentStorage<'t> {
+    type Names = &'t mut [ClassName];
+    type Rows = &'t mut [u64];
+    type Priors = &'t mut [Gaussian];
+    type MlFreqs = &'t mut [f32];
+    type MapFreqs = &'t mut [f32];
+    type Ml = &'t mut [Histogram<&'t mut [f32]>];
+    type Map = &'t mut [Histogram<&'t mut [f32]>];
+    type Settings = &'t mut Settings;
+    type Axes = &'t mut [Axis];
+    type Terms = &'t mut [f32];
+    type Categories = &'t mut [u64];
+    type LogPrior = &'t mut [f32];
+    type Knots = &'t mut [Knot];
+    type ObjectnessAxis = &'t mut [Axis];
+    type ObjectnessTerms = &'t mut [f32];
+    type Extent = LentParts;
+    type View<'a>
+        = TableView<'a, &'t mut [f32], &'t mut [f32]>
+    where
+        Self: 'a;
+
+    const NAME: &'static str = "LentTable";
+    const OBJECTNESS_REQUIRED: bool = false;
+
+    #[inline]
+    fn in_use(t: &LentTable<'t>) -> InUse {
+        InUse {
+            classes: t.names.len(),
+            bayes: t.extent.bayes,
+            categories: t.bayes_rows.len(),
+            terms: t.bayes_terms.len(),
+            objectness: t.extent.objectness,
+            objectness_terms: t.bayes_os_terms.len(),
+            maps: true,
+        }
+    }
+
+    /// [`DecodeError::ShapeMismatch`] or [`DecodeError::BayesShapeMismatch`] unless the
+    /// header's shape is exactly the storage's; then, as every decoder, a body too short
+    /// for the announced floats is malformed.
+    fn prepare(
+        t: &mut LentTable<'t>,
+        s: &StorageShape,
+        (shape, bayes_shape): ((u16, u16, u16), (u16, u16)),
+        body: usize,
+    ) -> Result<(), DecodeError> {
+        let k = s.classes;
+        let lens_ok = |h: &[Histogram<&'t mut [f32]>], b: usize| {
+            h.len() == k && h.iter().all(|h| h.freqs.len() == b)
+        };
+        let held = |h: &[Histogram<&'t mut [f32]>]| {
+            u16::try_from(h.first().map_or(0, |h| h.freqs.len())).unwrap_or(u16::MAX)
+        };
+        if [t.names.len(), t.rows.len(), t.priors.len()]
+            .iter()
+            .any(|&n| n != k)
+            || !lens_ok(t.ml, s.bins_ml)
+            || !lens_ok(t.map, s.bins_map)
+        {
+            return Err(DecodeError::ShapeMismatch {
+                expected: (
+                    u16::try_from(t.names.len()).unwrap_or(u16::MAX),
+                    held(t.ml),
+                    held(t.map),
+                ),
+                found: shape,
+            });
+        }
+        let (bins, cats) = (s.bins_bayes, s.categories);
+        let bayes_ok = if t.extent.bayes {
+            t.bayes_axes.len() == k
+                && t.bayes_rows.len() == cats
+                && t.bayes_log_prior.len() == cats
+                && Some(t.bayes_terms.len())
+                    == cats.checked_mul(k).and_then(|n| n.checked_mul(bins))
+        } else {
+            bins == 0
+        };
+        if !bayes_ok {
+            let held = if t.extent.bayes {
+                let c = t.bayes_rows.len();
+                let bins = t.bayes_terms.len().checked_div(c * k).unwrap_or(0);
+                (
+                    u16::try_from(bins).unwrap_or(u16::MAX),
+                    u16::try_from(c).unwrap_or(u16::MAX),
+                )
+            } else {
+                (0, 0)
+            };
+            return Err(DecodeError::BayesShapeMismatch {
+                expected: held,
+                found: bayes_shape,
+            });
+        }
+        // Storage lent for a Bayes head, for a table without one, is malformed.
+        if s.floats().saturating_mul(4) > body || t.extent.bayes != (bins > 0) {
+            return Err(DecodeError::Malformed);
+        }
+        Ok(())
+    }
+
+    fn finish(t: &mut LentTable<'t>, _: &StorageShape, objectness: bool, _: [usize; 4]) {
+        t.extent.objectness = objectness;
+    }
+
+    #[inline]
+    fn wrap<'a>(
+        _: &'a LentTable<'t>,
+        view: TableView<'a, &'t mut [f32], &'t mut [f32]>,
+    ) -> Self::View<'a> {
+        view
+    }
 }
 
 /// A Bayes head's storage, lent slice by slice.
@@ -97,179 +208,99 @@ pub struct LentBayes<'t> {
     pub objectness_terms: &'t mut [f32],
 }
 
-impl<'t, 'a> LentTable<'t, '_, 'a> {
-    /// The shape this storage has room for: [`DecodeError::ShapeMismatch`] or
-    /// [`DecodeError::BayesShapeMismatch`] unless the header's shape is exactly it.
-    fn check_shape(&self, header: &Header) -> Result<(), DecodeError> {
-        let k = usize::from(header.k);
-        let (bml, bmap) = (usize::from(header.bins_ml), usize::from(header.bins_map));
-        let lens_ok = |h: &[Histogram<&'t mut [f32]>], b: usize| {
-            h.len() == k && h.iter().all(|h| h.freqs.len() == b)
-        };
-        let held = |h: &[Histogram<&'t mut [f32]>]| {
-            u16::try_from(h.first().map_or(0, |h| h.freqs.len())).unwrap_or(u16::MAX)
-        };
-        if [
-            self.names.len(),
-            self.rows.len(),
-            self.priors.len(),
-            self.scratch_names.len(),
-            self.scratch_lens.len(),
-        ]
-        .iter()
-        .any(|&n| n != k)
-            || !lens_ok(self.ml, bml)
-            || !lens_ok(self.map, bmap)
-        {
-            return Err(DecodeError::ShapeMismatch {
-                expected: (
-                    u16::try_from(self.names.len()).unwrap_or(u16::MAX),
-                    held(self.ml),
-                    held(self.map),
-                ),
-                found: header.shape(),
-            });
+impl<'t> LentTable<'t> {
+    /// Storage lent for one table: K class names, row counts and priors, K ML and K MAP
+    /// histograms each over its own `bins_ml` (`bins_map`) frequencies, the settings,
+    /// the Bayes head's storage for a table with one, and each head's map (ML, MAP,
+    /// Bayes, open): `knots[h]` knots. Fill every slice with the placeholders of this
+    /// module before lending it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn lend(
+        names: &'t mut [ClassName],
+        rows: &'t mut [u64],
+        priors: &'t mut [Gaussian],
+        ml: &'t mut [Histogram<&'t mut [f32]>],
+        map: &'t mut [Histogram<&'t mut [f32]>],
+        settings: &'t mut Settings,
+        bayes: Option<LentBayes<'t>>,
+        knots: [&'t mut [Knot]; 4],
+    ) -> Self {
+        let has_bayes = bayes.is_some();
+        let b = bayes.unwrap_or(LentBayes {
+            axes: &mut [],
+            terms: &mut [],
+            rows: &mut [],
+            log_prior: &mut [],
+            objectness_axis: &mut [],
+            objectness_terms: &mut [],
+        });
+        Self {
+            names,
+            rows,
+            priors,
+            ml,
+            map,
+            settings,
+            bayes_axes: b.axes,
+            bayes_terms: b.terms,
+            bayes_rows: b.rows,
+            bayes_log_prior: b.log_prior,
+            bayes_lambda: 0.0,
+            bayes_log_lambda: 0.0,
+            bayes_open: None,
+            recal: knots,
+            recal_len: [0; 4],
+            bayes_os_axis: b.objectness_axis,
+            bayes_os_terms: b.objectness_terms,
+            extent: LentParts {
+                bayes: has_bayes,
+                objectness: false,
+            },
         }
-        let (bins, cats) = (
-            usize::from(header.bins_bayes),
-            usize::from(header.categories),
-        );
-        let bayes_ok = match &self.bayes {
-            None => bins == 0,
-            Some(b) => {
-                b.axes.len() == k
-                    && b.rows.len() == cats
-                    && b.log_prior.len() == cats
-                    && Some(b.terms.len()) == cats.checked_mul(k).and_then(|n| n.checked_mul(bins))
-            }
-        };
-        if !bayes_ok {
-            let held = self.bayes.as_ref().map_or((0, 0), |b| {
-                let c = b.rows.len();
-                let bins = b.terms.len().checked_div(c * k).unwrap_or(0);
-                (
-                    u16::try_from(bins).unwrap_or(u16::MAX),
-                    u16::try_from(c).unwrap_or(u16::MAX),
-                )
-            });
-            return Err(DecodeError::BayesShapeMismatch {
-                expected: held,
-                found: header.bayes_shape(),
-            });
-        }
-        Ok(())
     }
 
     /// Decodes and validates `bytes` into the lent storage, which must have exactly the
     /// table's shape ([`StorageShape::of`]), and returns the table as a [`TableView`]
-    /// borrowing it. Runs the decoder of every table ([`Table`](crate::Table),
+    /// borrowing it for `'t`. Runs the decoder of every table ([`Table`](crate::Table),
     /// [`BoundedTable`](crate::BoundedTable), `DynTable`): the same checks in the same
-    /// order.
+    /// order. `scratch_names` and `scratch_lens` are the decoder's scratch, K entries
+    /// each, used only while it runs.
     ///
     /// # Errors
     ///
     /// As [`Table::from_bytes`](crate::Table::from_bytes); a shape mismatch means
     /// storage of another shape than the table's; [`DecodeError::MapCapacity`] a map
     /// longer than its slice in `knots` (and at most [`MAX_KNOTS`](crate::MAX_KNOTS)),
-    /// [`DecodeError::ObjectnessMismatch`] an objectness feature without room for it.
-    pub fn decode(
-        self,
+    /// [`DecodeError::ObjectnessMismatch`] an objectness feature without room for it,
+    /// [`DecodeError::Malformed`] scratch of fewer than K entries.
+    pub fn decode<'a>(
+        mut self,
         bytes: &'a [u8],
+        scratch_names: &mut [&'a str],
+        scratch_lens: &mut [(usize, usize)],
     ) -> Result<TableView<'t, &'t mut [f32], &'t mut [f32]>, DecodeError> {
-        let bytes = crate::sections::table_part(bytes);
-        let (header, body) = wire::open(bytes)?;
-        self.check_shape(&header)?;
-        let shape = StorageShape {
-            classes: usize::from(header.k),
-            bins_ml: usize::from(header.bins_ml),
-            bins_map: usize::from(header.bins_map),
-            bins_bayes: usize::from(header.bins_bayes),
-            categories: usize::from(header.categories),
-            ..StorageShape::default()
+        self.decode_with(bytes, |_| (scratch_names, scratch_lens))?;
+        let in_use = LentStorage::in_use(&self);
+        let recal: [&'t [Knot]; 4] = self.recal.map(|k| &*k);
+        let parts = Parts {
+            names: self.names,
+            rows: self.rows,
+            priors: self.priors,
+            ml: self.ml,
+            map: self.map,
+            settings: self.settings,
+            axes: self.bayes_axes,
+            terms: self.bayes_terms,
+            categories: self.bayes_rows,
+            log_prior: self.bayes_log_prior,
+            lambda: self.bayes_lambda,
+            log_lambda: self.bayes_log_lambda,
+            open: self.bayes_open,
+            os_axis: self.bayes_os_axis,
+            os_terms: self.bayes_os_terms,
+            maps: maps_of(in_use.maps, &self.recal_len, |h| recal.get(h).copied()),
         };
-        if shape.floats().saturating_mul(4) > body.len() {
-            return Err(DecodeError::Malformed);
-        }
-        let LentTable {
-            names,
-            rows,
-            priors,
-            ml,
-            map,
-            settings,
-            scratch_names,
-            scratch_lens,
-            mut bayes,
-            knots: [k0, k1, k2, k3],
-        } = self;
-        let (mut lambda, mut log_lambda, mut open, mut has_os) = (0.0f32, 0.0f32, None, false);
-        let counts = Slots {
-            names: &mut *names,
-            raw_names: scratch_names,
-            lens: scratch_lens,
-            rows: &mut *rows,
-            priors: &mut *priors,
-            ml: &mut *ml,
-            map: &mut *map,
-            settings: &mut *settings,
-            bayes: bayes.as_mut().map(|b| BayesStorage {
-                axes: &mut *b.axes,
-                terms: &mut *b.terms,
-                rows: &mut *b.rows,
-                log_prior: &mut *b.log_prior,
-                lambda: &mut lambda,
-                log_lambda: &mut log_lambda,
-                open: &mut open,
-                objectness_axis: &mut *b.objectness_axis,
-                objectness_terms: &mut *b.objectness_terms,
-                objectness_required: false,
-                has_objectness: &mut has_os,
-            }),
-            recal: [&mut *k0, &mut *k1, &mut *k2, &mut *k3],
-        }
-        .decode(&header, body)?;
-        if shape.classes < 2 {
-            return Err(TableError::ClassCount.into());
-        }
-        let knots: [&'t [Knot]; 4] = [k0, k1, k2, k3];
-        let mut maps = Maps::NONE;
-        for ((slot, all), n) in maps.0.iter_mut().zip(knots).zip(counts) {
-            *slot = all.get(..n).unwrap_or_default();
-        }
-        let bayes = match bayes {
-            Some(b) => {
-                let objectness = if has_os {
-                    let axis = *b.objectness_axis.first().ok_or(DecodeError::Malformed)?;
-                    let terms: &'t [f32] = b.objectness_terms;
-                    Some((axis, terms))
-                } else {
-                    None
-                };
-                Some(BayesView {
-                    axes: b.axes,
-                    terms: b.terms,
-                    rows: b.rows,
-                    log_prior: b.log_prior,
-                    lambda,
-                    log_lambda,
-                    open,
-                    objectness,
-                })
-            }
-            None => None,
-        };
-        let view = TableView {
-            names,
-            rows,
-            priors,
-            ml,
-            map,
-            bayes,
-            settings,
-            maps,
-        };
-        wire::check_canonical(bytes.len(), &view)?;
-        Ok(view)
+        Ok(view_of(parts, in_use))
     }
 }
 
@@ -334,16 +365,14 @@ mod tests {
             split(&mut self.freqs_ml, s.classes, s.bins_ml, ml);
             split(&mut self.freqs_map, s.classes, s.bins_map, map);
             let [k0, k1, k2, k3] = &mut self.knots;
-            LentTable {
-                names: &mut self.names,
-                rows: &mut self.rows,
-                priors: &mut self.priors,
+            LentTable::lend(
+                &mut self.names,
+                &mut self.rows,
+                &mut self.priors,
                 ml,
                 map,
-                settings: &mut self.settings,
-                scratch_names: &mut self.raw,
-                scratch_lens: &mut self.lens,
-                bayes: (s.bins_bayes > 0).then_some(LentBayes {
+                &mut self.settings,
+                (s.bins_bayes > 0).then_some(LentBayes {
                     axes: &mut self.axes,
                     terms: &mut self.terms,
                     rows: &mut self.brows,
@@ -351,9 +380,9 @@ mod tests {
                     objectness_axis: &mut self.os_axis,
                     objectness_terms: &mut self.os_terms,
                 }),
-                knots: [k0, k1, k2, k3],
-            }
-            .decode(bytes)
+                [k0, k1, k2, k3],
+            )
+            .decode(bytes, &mut self.raw, &mut self.lens)
         }
     }
 
@@ -390,7 +419,7 @@ mod tests {
 
     fn with_crc(mut bytes: Vec<u8>) -> Vec<u8> {
         let n = bytes.len() - 4;
-        let crc = wire::CRC.checksum(&bytes[..n]);
+        let crc = crate::format::wire::CRC.checksum(&bytes[..n]);
         bytes[n..].copy_from_slice(&crc.to_le_bytes());
         bytes
     }

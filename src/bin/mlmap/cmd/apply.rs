@@ -115,9 +115,9 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
     // in column order: ML and MAP always, Bayes and open when present (the open head is
     // built on the Bayes head).
     let mut table_heads = vec![Head::Ml, Head::Map];
-    if table.bayes().is_some() {
+    if table.bayes_head().is_some() {
         table_heads.push(Head::Bayes);
-        if table.open().is_some() {
+        if table.open_params().is_some() {
             table_heads.push(Head::Open);
         }
     }
@@ -171,7 +171,7 @@ pub fn run(args: &ApplyArgs) -> Result<()> {
         heads: &heads,
         names: &names,
         conformal: conformal.as_ref().map(|(s, at)| (s, *at)),
-        bayes_categories: table.bayes().map_or(0, |b| b.categories()),
+        bayes_categories: table.bayes_head().map_or(0, |b| b.categories()),
     };
     match format {
         ApplyFormat::Csv => write_csv(&scorer),

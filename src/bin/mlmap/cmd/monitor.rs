@@ -194,7 +194,7 @@ fn spec_of<'a>(
 
 fn replay(args: &MonitorArgs, table_path: &std::path::Path, input: &std::path::Path) -> Result<()> {
     let (table, bytes) = read_table(table_path)?;
-    if table.bayes().is_none() {
+    if table.bayes_head().is_none() {
         return Err(CliError::input(
             table_path,
             "the table has no Bayes head, which the monitor bins on (DESIGN §7)",

@@ -77,7 +77,7 @@ pub fn run(args: &QuantizeArgs) -> Result<()> {
         bits: args.bits,
         scales: &scales,
         zero_points: &zero_points,
-        bayes: table.bayes().is_some() && !args.no_bayes,
+        bayes: table.bayes_head().is_some() && !args.no_bayes,
     };
     let view = table.view();
     let bad = |e| CliError::Input(format!("cannot quantize {}: {e}", args.table.display()));

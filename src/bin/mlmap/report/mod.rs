@@ -243,7 +243,7 @@ pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
         table.bins_map(),
         st.lambda_map
     );
-    match table.bayes() {
+    match table.bayes_head() {
         Some(b) => {
             let _ = writeln!(
                 s,
@@ -262,7 +262,7 @@ pub fn table_summary(path: &Path, table: &DynTable, size: usize) -> String {
             let _ = writeln!(s, "  Bayes none");
         }
     }
-    match table.open() {
+    match table.open_params() {
         Some(o) => {
             let _ = writeln!(
                 s,

@@ -118,13 +118,13 @@ fn render_text(path: &std::path::Path, t: &DynTable, bytes: &[u8], bins: bool) -
     for (name, h) in names.iter().zip(t.map_histograms()) {
         histogram_lines(&mut s, "MAP", name, h, bins);
     }
-    match t.bayes() {
+    match t.bayes_head() {
         Some(b) => bayes_text(&mut s, &b, &names, bins),
         None => {
             let _ = writeln!(s, "\nBayes head  none");
         }
     }
-    match t.open() {
+    match t.open_params() {
         Some(o) => {
             let _ = writeln!(
                 s,
@@ -169,11 +169,13 @@ const HEADS: [Head; 4] = [Head::Ml, Head::Map, Head::Bayes, Head::Open];
 /// The format version the table is written in (DESIGN §3): 4 with a recalibration
 /// map, 3 with the open head, 2 with the Bayes head only, 1 otherwise.
 fn file_version(t: &DynTable) -> u16 {
-    let feature = t.bayes().is_some_and(|b| b.objectness_axis().is_some());
+    let feature = t
+        .bayes_head()
+        .is_some_and(|b| b.objectness_axis().is_some());
     if feature || HEADS.iter().any(|&h| t.recal_map(h).is_some()) {
         return 4;
     }
-    match (t.bayes().is_some(), t.open().is_some()) {
+    match (t.bayes_head().is_some(), t.open_params().is_some()) {
         (_, true) => 3,
         (true, false) => 2,
         (false, false) => 1,
@@ -228,8 +230,8 @@ fn render_json(
         "lambda_ml": st.lambda_ml,
         "lambda_map": st.lambda_map,
         "classes": classes,
-        "bayes": t.bayes().map(|b| bayes_json(&b, &names)),
-        "open": t.open().map(|o| serde_json::json!({
+        "bayes": t.bayes_head().map(|b| bayes_json(&b, &names)),
+        "open": t.open_params().map(|o| serde_json::json!({
             "temperature": o.temperature(),
             "epsilon": o.epsilon(),
             "log_unknown": o.log_unknown(),
