@@ -511,6 +511,8 @@ raised_bin_properties! {
 /// `fast_math_max_score_error(C) * OS`, plus `OS * f32::MIN_POSITIVE` for masses below
 /// the normal range (absolute rounding `2^-149` on a total of at least 1) and two
 /// subnormal steps for subnormal scores.
-
 #[cfg(feature = "std")]
 pub(crate) mod bayes;
+/// Random Bayes heads and the tables built from them.
+#[cfg(feature = "std")]
+pub(crate) mod bayes_tables;
