@@ -13,8 +13,8 @@ use crate::heads::recal::Knot;
 use crate::math::histogram::Histogram;
 use crate::math::Libm;
 use crate::quantized::qtable::{
-    code_range, dequantize, index_width, HEADER_LEN, OPEN_LEN, QUANTIZED_MAGIC, QUANTIZED_VERSION,
-    QUANTIZED_VERSION_1, QUANTIZED_VERSION_2,
+    code_range, dequantize, index_width, QHeader, FLAG_BAYES, FLAG_OBJECTNESS, FLAG_OPEN,
+    HEADER_LEN, OPEN_LEN, QUANTIZED_VERSION, QUANTIZED_VERSION_1, QUANTIZED_VERSION_2,
 };
 use crate::storage::view::TableView;
 
@@ -199,18 +199,24 @@ fn write<F: AsRef<[f32]>, G: AsRef<[f32]>>(
         QUANTIZED_VERSION_1
     };
     let v3 = version == QUANTIZED_VERSION;
-    let flags = u8::from(bayes.is_some())
-        | if v3 && open.is_some() { 2 } else { 0 }
-        | if feature.is_some() { 4 } else { 0 };
-    out.put(&QUANTIZED_MAGIC)?;
-    out.put(&[version, params.bits, flags, 0])?;
-    for v in [narrow(k), bins_ml, bins_bayes, cats] {
-        out.put(&v.to_le_bytes())?;
-    }
-    out.put(&wire::table_crc(table).to_le_bytes())?;
-    out.put(&settings.lambda_ml.to_le_bytes())?;
-    out.put(&settings.lambda_map.to_le_bytes())?;
-    out.put(&bayes.map_or(0.0, |b| b.log_lambda).to_le_bytes())?;
+    let flag = |on: bool, f: u8| if on { f } else { 0 };
+    let header = QHeader {
+        version,
+        bits: params.bits,
+        flags: flag(bayes.is_some(), FLAG_BAYES)
+            | flag(v3 && open.is_some(), FLAG_OPEN)
+            | flag(feature.is_some(), FLAG_OBJECTNESS),
+        reserved: 0,
+        k: narrow(k),
+        bins_ml,
+        bins_bayes,
+        categories: cats,
+        table_crc: wire::table_crc(table),
+        lambda_ml: settings.lambda_ml,
+        lambda_map: settings.lambda_map,
+        log_lambda: bayes.map_or(0.0, |b| b.log_lambda),
+    };
+    out.put(&header.to_bytes())?;
     debug_assert_eq!(out.len, HEADER_LEN);
     let tail = settings.upper_tail;
     let x_of = |c: usize, q: i32| {

@@ -59,7 +59,10 @@ mod section;
 pub use inner::{AnyCode, QTableInner};
 pub use lent::{LentQTable, EMPTY_QCLASS, EMPTY_QLOGIT};
 pub(crate) use score::QView;
-pub(crate) use section::{f32_at, index_at, index_width, locate, offset, parse, table_part, Meta};
+pub(crate) use section::{
+    f32_at, index_at, index_width, locate, offset, parse, table_part, Meta, QHeader, FLAG_BAYES,
+    FLAG_OBJECTNESS, FLAG_OPEN,
+};
 pub use section::{QClass, QLogit};
 
 /// The four bytes a quantized section starts with.

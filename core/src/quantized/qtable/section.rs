@@ -76,6 +76,78 @@ pub struct Meta<'a> {
 /// Reads little-endian fields from the front of a byte slice.
 pub(super) struct Reader<'a>(&'a [u8]);
 
+/// Flag of a quantized section's header: the section has the Bayes head.
+pub(crate) const FLAG_BAYES: u8 = 1;
+/// Flag (version 3): the section has the open head (with the Bayes head).
+pub(crate) const FLAG_OPEN: u8 = 2;
+/// Flag (version 3): the section has the objectness feature (with the Bayes head).
+pub(crate) const FLAG_OBJECTNESS: u8 = 4;
+
+/// The fixed header of a quantized section (docs/FORMAT.md, "The quantized section"):
+/// the one declaration of its fields and their order, which the writer
+/// (`quantize_into`) and the reader (`parse`) share.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct QHeader {
+    pub(crate) version: u8,
+    pub(crate) bits: u8,
+    pub(crate) flags: u8,
+    pub(crate) reserved: u8,
+    pub(crate) k: u16,
+    pub(crate) bins_ml: u16,
+    pub(crate) bins_bayes: u16,
+    pub(crate) categories: u16,
+    pub(crate) table_crc: u32,
+    pub(crate) lambda_ml: f32,
+    pub(crate) lambda_map: f32,
+    pub(crate) log_lambda: f32,
+}
+
+impl QHeader {
+    /// The header's [`HEADER_LEN`] bytes, the magic first.
+    pub(crate) fn to_bytes(self) -> [u8; HEADER_LEN] {
+        let mut b = [0u8; HEADER_LEN];
+        let fields: [&[u8]; 10] = [
+            &QUANTIZED_MAGIC,
+            &[self.version, self.bits, self.flags, self.reserved],
+            &self.k.to_le_bytes(),
+            &self.bins_ml.to_le_bytes(),
+            &self.bins_bayes.to_le_bytes(),
+            &self.categories.to_le_bytes(),
+            &self.table_crc.to_le_bytes(),
+            &self.lambda_ml.to_le_bytes(),
+            &self.lambda_map.to_le_bytes(),
+            &self.log_lambda.to_le_bytes(),
+        ];
+        let mut at = 0;
+        for f in fields {
+            if let Some(d) = b.get_mut(at..at + f.len()) {
+                d.copy_from_slice(f);
+            }
+            at += f.len();
+        }
+        b
+    }
+
+    /// Reads the header after the magic (which the section's location checked).
+    fn read(r: &mut Reader<'_>) -> Result<Self, QTableError> {
+        let _magic = r.take(QUANTIZED_MAGIC.len())?;
+        Ok(Self {
+            version: r.u8()?,
+            bits: r.u8()?,
+            flags: r.u8()?,
+            reserved: r.u8()?,
+            k: r.u16()?,
+            bins_ml: r.u16()?,
+            bins_bayes: r.u16()?,
+            categories: r.u16()?,
+            table_crc: r.u32()?,
+            lambda_ml: r.f32()?,
+            lambda_map: r.f32()?,
+            log_lambda: r.f32()?,
+        })
+    }
+}
+
 impl<'a> Reader<'a> {
     fn take(&mut self, n: usize) -> Result<&'a [u8], QTableError> {
         if n > self.0.len() {
@@ -191,39 +263,44 @@ pub(crate) fn parse<'a>(
     };
     let body_len = section.len().saturating_sub(TRAILER_LEN);
     let mut r = Reader(section.get(..body_len).unwrap_or(&[]));
-    let _magic = r.take(4)?;
-    let version = r.u8()?;
+    let QHeader {
+        version,
+        bits,
+        flags,
+        reserved,
+        k,
+        bins_ml,
+        bins_bayes,
+        categories,
+        table_crc,
+        lambda_ml,
+        lambda_map,
+        log_lambda,
+    } = QHeader::read(&mut r)?;
     if !(QUANTIZED_VERSION_1..=QUANTIZED_VERSION).contains(&version) {
         return Err(QTableError::UnsupportedVersion { found: version });
     }
-    let bits = r.u8()?;
-    let flags = r.u8()?;
-    let reserved = r.u8()?;
-    let k = r.u16()?;
-    let bins_ml = r.u16()?;
-    let bins_bayes = r.u16()?;
-    let categories = r.u16()?;
-    let table_crc = r.u32()?;
-    let lambda_ml = r.f32()?;
-    let lambda_map = r.f32()?;
-    let log_lambda = r.f32()?;
     // Flags: bit 0 the Bayes head; in version 3, bit 1 the open head (which needs the
     // Bayes head). Version 2 is the version of sections with the open head.
     // Version 3 also has bit 2: the objectness feature (which needs the Bayes head).
     let has_maps = version == QUANTIZED_VERSION;
-    let max_flags = if has_maps { 7 } else { 1 };
-    let has_open = version == QUANTIZED_VERSION_2 || (has_maps && flags & 2 != 0);
-    let has_feature = has_maps && flags & 4 != 0;
-    if has_feature && flags & 1 == 0 {
+    let max_flags = if has_maps {
+        FLAG_BAYES | FLAG_OPEN | FLAG_OBJECTNESS
+    } else {
+        FLAG_BAYES
+    };
+    let has_open = version == QUANTIZED_VERSION_2 || (has_maps && flags & FLAG_OPEN != 0);
+    let has_feature = has_maps && flags & FLAG_OBJECTNESS != 0;
+    if has_feature && flags & FLAG_BAYES == 0 {
         return Err(QTableError::Malformed);
     }
-    if reserved != 0 || flags > max_flags || (has_open && flags & 1 == 0) {
+    if reserved != 0 || flags > max_flags || (has_open && flags & FLAG_BAYES == 0) {
         return Err(QTableError::Malformed);
     }
-    if version == QUANTIZED_VERSION_2 && flags != 1 {
+    if version == QUANTIZED_VERSION_2 && flags != FLAG_BAYES {
         return Err(QTableError::Malformed);
     }
-    let has_bayes = flags & 1 == 1;
+    let has_bayes = flags & FLAG_BAYES != 0;
     if !(bits == 8 || bits == 16) || k < 2 || k == u16::MAX || bins_ml == 0 {
         return Err(invalid(QField::Shape, 0));
     }
