@@ -35,8 +35,6 @@ use core::ffi::c_char;
 use core::mem::size_of;
 use core::ptr;
 
-use mlmap::{EdgeMode, UpperTail};
-
 mod limits {
     include!(concat!(env!("OUT_DIR"), "/limits.rs"));
 }
@@ -452,14 +450,8 @@ pub unsafe extern "C" fn mlmap_settings(
                     lambda_ml: s.lambda_ml,
                     lambda_map: s.lambda_map,
                     lambda_bayes: v.bayes().map_or(0.0, |b| b.lambda()),
-                    upper_tail: match s.upper_tail {
-                        UpperTail::Zero => 0,
-                        UpperTail::Clamp => 1,
-                    },
-                    edge_mode: match s.edge_mode {
-                        EdgeMode::Linspace => 0,
-                        EdgeMode::Matlab => 1,
-                    },
+                    upper_tail: i32::from(s.upper_tail.code()),
+                    edge_mode: i32::from(s.edge_mode.code()),
                     temperature: open.map_or(0.0, |o| o.temperature()),
                     epsilon: open.map_or(0.0, |o| o.epsilon()),
                 },

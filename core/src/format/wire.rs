@@ -273,30 +273,16 @@ struct SettingsWire {
 impl SettingsWire {
     fn from_settings(s: &Settings) -> Self {
         Self {
-            edge_mode: match s.edge_mode {
-                EdgeMode::Linspace => 0,
-                EdgeMode::Matlab => 1,
-            },
-            upper_tail: match s.upper_tail {
-                UpperTail::Zero => 0,
-                UpperTail::Clamp => 1,
-            },
+            edge_mode: s.edge_mode.code(),
+            upper_tail: s.upper_tail.code(),
             lambda_ml: s.lambda_ml,
             lambda_map: s.lambda_map,
         }
     }
 
     fn to_settings(&self) -> Result<Settings, DecodeError> {
-        let edge_mode = match self.edge_mode {
-            0 => EdgeMode::Linspace,
-            1 => EdgeMode::Matlab,
-            _ => return Err(DecodeError::Malformed),
-        };
-        let upper_tail = match self.upper_tail {
-            0 => UpperTail::Zero,
-            1 => UpperTail::Clamp,
-            _ => return Err(DecodeError::Malformed),
-        };
+        let edge_mode = EdgeMode::from_code(self.edge_mode).ok_or(DecodeError::Malformed)?;
+        let upper_tail = UpperTail::from_code(self.upper_tail).ok_or(DecodeError::Malformed)?;
         let s = Settings {
             lambda_ml: self.lambda_ml,
             lambda_map: self.lambda_map,

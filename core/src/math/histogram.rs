@@ -31,6 +31,33 @@ pub enum UpperTail {
     Clamp,
 }
 
+impl UpperTail {
+    /// The policy's code in a table file's settings and in the C API's
+    /// `mlmap_settings_t` (docs/FORMAT.md): `Zero` 0, `Clamp` 1.
+    ///
+    /// ```
+    /// # use mlmap_core as mlmap;
+    /// use mlmap::UpperTail;
+    /// assert_eq!(UpperTail::from_code(UpperTail::Clamp.code()), Some(UpperTail::Clamp));
+    /// assert_eq!(UpperTail::from_code(2), None);
+    /// ```
+    pub const fn code(self) -> u8 {
+        match self {
+            Self::Zero => 0,
+            Self::Clamp => 1,
+        }
+    }
+
+    /// The policy of a code, `None` for a code no policy has.
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Self::Zero),
+            1 => Some(Self::Clamp),
+            _ => None,
+        }
+    }
+}
+
 /// How the fit placed the bin edges (recorded in the table, informational for the layer).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EdgeMode {
@@ -39,6 +66,33 @@ pub enum EdgeMode {
     Linspace,
     /// The edges MATLAB's `histogram(x, nbins)` picks (round bin width and left edge).
     Matlab,
+}
+
+impl EdgeMode {
+    /// The mode's code in a table file's settings and in the C API's `mlmap_settings_t`
+    /// (docs/FORMAT.md): `Linspace` 0, `Matlab` 1.
+    ///
+    /// ```
+    /// # use mlmap_core as mlmap;
+    /// use mlmap::EdgeMode;
+    /// assert_eq!(EdgeMode::from_code(EdgeMode::Matlab.code()), Some(EdgeMode::Matlab));
+    /// assert_eq!(EdgeMode::from_code(2), None);
+    /// ```
+    pub const fn code(self) -> u8 {
+        match self {
+            Self::Linspace => 0,
+            Self::Matlab => 1,
+        }
+    }
+
+    /// The mode of a code, `None` for a code no mode has.
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Self::Linspace),
+            1 => Some(Self::Matlab),
+            _ => None,
+        }
+    }
 }
 
 /// A histogram that does not satisfy the table invariants.

@@ -115,14 +115,8 @@ impl From<&FitParams> for ParamsWire {
             lambda_ml: p.lambda_ml,
             bins_map: p.bins_map as u64,
             lambda_map: p.lambda_map,
-            edges: match p.edges {
-                EdgeMode::Linspace => 0,
-                EdgeMode::Matlab => 1,
-            },
-            upper_tail: match p.upper_tail {
-                UpperTail::Zero => 0,
-                UpperTail::Clamp => 1,
-            },
+            edges: p.edges.code(),
+            upper_tail: p.upper_tail.code(),
             bayes: p.bayes.map(|b| (b.bins as u64, b.lambda)),
         }
     }
@@ -137,16 +131,8 @@ impl ParamsWire {
             lambda_ml: self.lambda_ml,
             bins_map: bins(self.bins_map)?,
             lambda_map: self.lambda_map,
-            edges: match self.edges {
-                0 => EdgeMode::Linspace,
-                1 => EdgeMode::Matlab,
-                _ => return Err(bad()),
-            },
-            upper_tail: match self.upper_tail {
-                0 => UpperTail::Zero,
-                1 => UpperTail::Clamp,
-                _ => return Err(bad()),
-            },
+            edges: EdgeMode::from_code(self.edges).ok_or_else(bad)?,
+            upper_tail: UpperTail::from_code(self.upper_tail).ok_or_else(bad)?,
             bayes: match self.bayes {
                 Some((b, lambda)) => Some(BayesParams {
                     bins: bins(b)?,
