@@ -14,7 +14,7 @@ layer reads them), and
 
     python3 tools/conformal_ref.py goldens tests/golden/conformal
 
-writes the goldens the Rust tests compare with (tests/conformal.rs), and a CSV of the
+writes the goldens the Rust tests compare with (tests/conformal/), and a CSV of the
 sets of a few detections for the C tests and the firmware.
 """
 import json

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the small NPY directories under tests/fixtures/ read by tests/host_data.rs.
+"""Writes the small NPY directories under tests/fixtures/ read by tests/host_data/.
 
 They are written by numpy itself, so the tests check that the reader accepts real
 numpy output (header padding, dtypes, byte order), not only what the Rust writer emits.

@@ -534,7 +534,7 @@ def head_scores(t, head, x, os_):
 
 
 # ---------------------------------------------------------------------------------------
-# Golden files for tests/layer.rs and tests/format.rs.
+# Golden files for tests/layer/ and tests/format/.
 
 # A hand-checkable K = 3 table: round edges (bin width 1 for ML, 2 for MAP) and round
 # frequencies. ML edges: car 0,1,2,3,4; cyclist -2,-1,0,1,2; pedestrian -4,-3,-2,-1,0.

@@ -181,7 +181,7 @@ pub fn check_objectness_feature<
 /// [`invariants::bayes_score_tolerance`] of the formula evaluated in `f64` from the
 /// view's terms ([`invariants::bayes_reference`]), the prior's shares when every logit
 /// is outside its axis, FastMath within `fast_math_max_score_error(C) * OS` of Libm
-/// (plus `OS * f32::MIN_POSITIVE` and two subnormal steps, see `tests/invariants.rs`),
+/// (plus `OS * f32::MIN_POSITIVE` and two subnormal steps, see `tests/invariants/`),
 /// and the same bits from `DynTable` and the batch.
 pub fn check_bayes_detection<
     const K: usize,
