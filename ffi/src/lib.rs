@@ -319,6 +319,9 @@ unsafe fn batch_rows<T: Copy>(
     mut row_copy: Option<&mut [T]>,
     mut score: impl FnMut(&[T], f32, &mut [f32]) -> Result<(), mlmap::InferError>,
 ) -> Result<(), mlmap_status_t> {
+    if row_copy.as_ref().is_some_and(|copy| copy.len() != k) {
+        return Err(MLMAP_ERR_LENGTH);
+    }
     if !done.is_null() {
         // SAFETY: non-NULL, aligned, the caller's `size_t`, overlapping nothing else.
         unsafe { done.write(0) };
@@ -334,11 +337,11 @@ unsafe fn batch_rows<T: Copy>(
                 objectness.add(r).read()
             };
             let row: &[T] = match row_copy.as_deref_mut() {
-                Some(copy) if copy.len() == k => {
+                // K values (checked before the loop).
+                Some(copy) => {
                     core::ptr::copy_nonoverlapping(input.add(at), copy.as_mut_ptr(), k);
                     copy
                 }
-                Some(_) => return Err(MLMAP_ERR_LENGTH),
                 None => core::slice::from_raw_parts(input.add(at), k),
             };
             score(row, os, core::slice::from_raw_parts_mut(out.add(at), k))?;
